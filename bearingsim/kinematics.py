@@ -1,0 +1,102 @@
+"""Ball kinematics under raceway control and defect frequencies (MODEL.md sections 4 and 8).
+
+Outer ring fixed, inner ring turning at omega = 2 pi n / 60 (rad/s).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import equinox as eqx
+import jax.numpy as jnp
+
+#: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
+CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)}
+
+
+def _f64(x):
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+class Operation(eqx.Module):
+    """Operating condition of the bearing.
+
+    ``speed``: inner-ring speed omega (rad/s, >= 0; outer ring fixed).
+    ``control``: raceway control hypothesis, "outer" | "inner" | "equal" (static).
+    ``centrifugal``, ``gyroscopic``: 1.0 to include the ball's centrifugal force / gyroscopic
+    moment, 0.0 to leave it out (floats so that they can be vmapped).
+    """
+
+    speed: jnp.ndarray = eqx.field(converter=_f64)
+    control: str = eqx.field(static=True, default="outer")
+    centrifugal: jnp.ndarray = eqx.field(converter=_f64, default=1.0)
+    gyroscopic: jnp.ndarray = eqx.field(converter=_f64, default=1.0)
+
+    def __check_init__(self):
+        if self.control not in CONTROL_FACTORS:
+            raise ValueError(f"raceway control must be one of {sorted(CONTROL_FACTORS)}, got {self.control!r}")
+
+    @classmethod
+    def from_rpm(cls, speed_rpm, control="outer", centrifugal=True, gyroscopic=True):
+        return cls(2.0 * jnp.pi * jnp.asarray(speed_rpm, dtype=jnp.float64) / 60.0, control,
+                   float(centrifugal), float(gyroscopic))
+
+    @property
+    def speed_rpm(self):
+        return self.speed * 60.0 / (2.0 * jnp.pi)
+
+    @property
+    def factors(self):
+        """(lambda_i, lambda_o)."""
+        return CONTROL_FACTORS[self.control]
+
+
+class BallKinematics(NamedTuple):
+    beta: jnp.ndarray            # ball spin-axis pitch angle (rad)
+    orbital_speed: jnp.ndarray   # omega_m, ball orbital (cage) speed (rad/s)
+    spin_speed: jnp.ndarray      # omega_R, ball spin magnitude (rad/s)
+    centrifugal: jnp.ndarray     # F_c (N)
+    gyroscopic: jnp.ndarray      # M_g (N m)
+
+
+def ball_kinematics(bearing, op: Operation, alpha_i, alpha_o) -> BallKinematics:
+    """Pitch angle, orbital and spin speeds, centrifugal force and gyroscopic moment of a ball.
+
+    Raceway control decides beta: outer (and "equal") tan(beta) = sin(a_o)/(cos(a_o) + g);
+    inner tan(beta) = sin(a_i)/(cos(a_i) - g).  Switches in ``op`` scale F_c and M_g.
+    """
+    g = bearing.g
+    if op.control == "inner":
+        beta = jnp.arctan2(jnp.sin(alpha_i), jnp.cos(alpha_i) - g)
+    else:
+        beta = jnp.arctan2(jnp.sin(alpha_o), jnp.cos(alpha_o) + g)
+    k_i = (1.0 - g * jnp.cos(alpha_i)) / jnp.cos(alpha_i - beta)
+    k_o = (1.0 + g * jnp.cos(alpha_o)) / jnp.cos(alpha_o - beta)
+    w = op.speed
+    w_m = w * k_i / (k_i + k_o)
+    w_R = w * k_i * k_o / ((k_i + k_o) * g)
+    Fc = op.centrifugal * 0.5 * bearing.ball_mass * bearing.pitch_diameter * w_m ** 2
+    Mg = op.gyroscopic * bearing.ball_inertia * w_R * w_m * jnp.sin(beta)
+    return BallKinematics(beta, w_m, w_R, Fc, Mg)
+
+
+class DefectFrequencies(NamedTuple):
+    """Characteristic defect frequencies (Hz), outer ring fixed.  ``bsf`` is once per ball
+    revolution; ``two_bsf`` = 2 BSF is what some tables (CWRU) list as "rolling element"."""
+
+    shaft: jnp.ndarray
+    ftf: jnp.ndarray
+    bpfo: jnp.ndarray
+    bpfi: jnp.ndarray
+    bsf: jnp.ndarray
+    two_bsf: jnp.ndarray
+
+
+def defect_frequencies(bearing, shaft_hz, alpha=None) -> DefectFrequencies:
+    """FTF, BPFO, BPFI, BSF (MODEL.md section 8) at contact angle ``alpha`` (rad, default alpha_0)."""
+    alpha = bearing.free_contact_angle if alpha is None else alpha
+    f = jnp.asarray(shaft_hz, dtype=jnp.float64)
+    gc = bearing.g * jnp.cos(alpha)
+    Z = bearing.n_balls
+    ftf = 0.5 * f * (1.0 - gc)
+    bsf = f * (1.0 - gc ** 2) / (2.0 * bearing.g)
+    return DefectFrequencies(f, ftf, Z * ftf, 0.5 * Z * f * (1.0 + gc), bsf, 2.0 * bsf)
