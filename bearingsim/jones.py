@@ -20,8 +20,8 @@ residuals to kN (moments divided by R_i), so one tolerance fits every DOF.
 
 Balls out of contact: a ball with no contact at omega = 0 carries nothing and sits at the
 closed-form mid-gap position (its equations hold identically); at speed the start pushes it
-onto the outer raceway, where F_c keeps it.  Friction (gyroscopic) terms act only at a
-contact that carries load.  A ball that has lost its inner contact over the spall is carried
+onto the outer raceway, where F_c keeps it.  The gyroscopic friction terms are those of
+MODEL.md for every ball.  A ball that has lost its inner contact over the spall is carried
 by the cage at the orbital speed of its undropped position (same q, no spall), see MODEL.md
 section 5.
 """
@@ -34,7 +34,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .defect import NO_SPALL, Spall, depth_profile
+from .defect import NO_SPALL, Spall, depth_profile, wrap_angle
 from .hertz import chebyshev_eval, hertz_contact, semi_axes, stiffness_curve
 from .kinematics import Operation, ball_kinematics
 
@@ -108,7 +108,14 @@ def ball_state(bearing, op: Operation, x, A1, A2, H_def, curve, wm_undropped=Non
     K_o = chebyshev_eval(curve.outer, X2 / Lo)
     Q_i = K_i * jnp.maximum(delta_i, 0.0) ** 1.5
     Q_o = K_o * jnp.maximum(delta_o, 0.0) ** 1.5
-    kin = ball_kinematics(bearing, op, alpha_i, alpha_o)
+    # Kinematics use the geometric inner angle.  A ball far off its inner raceway (a gap of
+    # the order of the groove radius) has a meaningless inner "angle" that can make
+    # k_i + k_o vanish; it is kept within 60 degrees of the outer angle (never active for a
+    # ball in, or near, inner contact).
+    lim = jnp.pi / 3.0
+    alpha_i_kin = jnp.where(delta_i > 0.0, alpha_i,
+                            alpha_o + jnp.clip(wrap_angle(alpha_i - alpha_o), -lim, lim))
+    kin = ball_kinematics(bearing, op, alpha_i_kin, alpha_o)
     wm, Fc, Mg = kin.orbital_speed, kin.centrifugal, kin.gyroscopic
     if wm_undropped is not None:
         # not driven by the inner ring over the spall: the cage carries it (MODEL.md 5)
@@ -118,9 +125,9 @@ def ball_state(bearing, op: Operation, x, A1, A2, H_def, curve, wm_undropped=Non
         wm = jnp.where(carried, wm_undropped, wm)
         Fc, Mg = Fc * scale, Mg * scale
     lam_i, lam_o = op.factors
-    # friction can only act where the contact carries load
-    fi = lam_i * jnp.where(delta_i > 0.0, 1.0, 0.0) * Mg / D
-    fo = lam_o * jnp.where(delta_o > 0.0, 1.0, 0.0) * Mg / D
+    # gyroscopic friction terms exactly as MODEL.md writes them (for every ball)
+    fi = lam_i * Mg / D
+    fo = lam_o * Mg / D
     si, ci = jnp.sin(alpha_i), jnp.cos(alpha_i)
     so, co = jnp.sin(alpha_o), jnp.cos(alpha_o)
     G = Q_i * si + fi * ci
@@ -274,58 +281,60 @@ def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol):
     """Damped Newton on R(q) = F in scaled variables.
 
     ``RJ(q) -> (J, (R, aux))`` evaluates the load-displacement map, its Jacobian and the ball
-    states in one pass; every accepted line-search point brings the Jacobian for the next step.
+    states in one pass.  A single loop does both Newton steps and backtracking: each pass
+    evaluates one trial point; an accepted trial brings the Jacobian for the next step (one
+    trace of the model, so compile time stays small).
     Returns (q, J, aux, result, iterations, residual max-norm in N).
     """
     Fn = F / rs
     tol = atol / KN + rtol * jnp.max(jnp.abs(Fn))
+    cap = 200.0   # um (or um at R_i) per Newton step
 
     def evaluate(z):
         J, (R, aux) = RJ(z * qs)
         return R / rs - Fn, J * (qs[None, :] / rs[:, None]), J, aux
 
-    cap = 200.0   # um (or um at R_i) per Newton step
-
-    def cond(c):
-        return (c[-1] < 0) & (c[-2] < maxit)
-
-    def body(c):
-        z, r, Js, J, aux, it, _ = c
+    def direction(Js, r):
         mu = 1e-13 * (jnp.max(jnp.abs(Js)) + 1e-30)
         dz = -jnp.linalg.solve(Js + mu * jnp.eye(5), r)
         n = jnp.max(jnp.abs(dz))
-        dz = jnp.where(n > cap, dz * (cap / n), dz)
-        r0 = jnp.max(jnp.abs(r))
+        return jnp.where(n > cap, dz * (cap / jnp.where(n > 0, n, 1.0)), dz)
 
-        def ls_cond(s):
-            return (~s[-1]) & (s[1] < _LS_STEPS)
+    def cond(c):
+        return c["code"] < 0
 
-        def ls_body(s):
-            t, k = s[0], s[1]
-            zt = z + t * dz
-            rt, Jst, Jt, auxt = evaluate(zt)
-            rn = jnp.max(jnp.abs(rt))
-            ok = jnp.isfinite(rn) & (rn <= (1.0 - 1e-4 * t) * r0)
-            return jnp.where(ok, t, 0.5 * t), k + 1, zt, rt, Jst, Jt, auxt, ok
-
-        init = (jnp.float64(1.0), jnp.int32(0), z, r, Js, J, aux, jnp.bool_(False))
-        t, k, zt, rt, Jst, Jt, auxt, ok = lax.while_loop(ls_cond, ls_body, init)
-        finite = jnp.all(jnp.isfinite(rt)) & jnp.all(jnp.isfinite(dz))
+    def body(c):
+        zt = c["z"] + c["t"] * c["dz"]
+        rt, Jst, Jt, auxt = evaluate(zt)
+        rn = jnp.max(jnp.abs(rt))
+        r0 = jnp.max(jnp.abs(c["r"]))
+        first = c["it"] < 0
+        finite = jnp.isfinite(rn) & jnp.all(jnp.isfinite(Jst))
+        ok = first | (finite & (rn <= (1.0 - 1e-4 * c["t"]) * r0))
+        sel = lambda new, old: jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, old)
+        z, r, Js, J, aux = sel((zt, rt, Jst, Jt, auxt), (c["z"], c["r"], c["Js"], c["J"], c["aux"]))
+        it = jnp.where(ok, c["it"] + 1, c["it"])
+        ls = jnp.where(ok, 0, c["ls"] + 1)
+        rnow = jnp.max(jnp.abs(r))
+        conv = rnow <= tol
         # at the round-off floor a failed line search with a tiny residual is convergence
-        floor = (~ok) & (r0 <= 1e3 * tol)
-        keep = lambda a, b: jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), a, b)
-        z_new, r_new, Js_new, J_new, aux_new = keep((zt, rt, Jst, Jt, auxt), (z, r, Js, J, aux))
-        conv = jnp.max(jnp.abs(r_new)) <= tol
-        code = jnp.where(~finite, 2, jnp.where(conv | floor, 0, jnp.where(ok, -1, 3)))
-        return z_new, r_new, Js_new, J_new, aux_new, it + 1, code.astype(jnp.int32)
+        stalled = ls >= _LS_STEPS
+        code = jnp.where(first & ~finite, 2,
+               jnp.where(conv | (stalled & (rnow <= 1e3 * tol)), 0,
+               jnp.where(stalled, 3, jnp.where(ok & (it >= maxit), 1, -1))))
+        dz = jnp.where(ok, direction(Js, r), c["dz"])
+        t = jnp.where(ok, 1.0, 0.5 * c["t"])
+        return dict(z=z, r=r, Js=Js, J=J, aux=aux, dz=dz, t=t, it=it, ls=ls,
+                    code=code.astype(jnp.int32))
 
     z0 = q0 / qs
-    r0, Js0, J0, aux0 = evaluate(z0)
-    code0 = jnp.where(jnp.max(jnp.abs(r0)) <= tol, 0, -1)
-    code0 = jnp.where(jnp.all(jnp.isfinite(r0)), code0, 2).astype(jnp.int32)
-    z, r, _, J, aux, it, code = lax.while_loop(cond, body, (z0, r0, Js0, J0, aux0, jnp.int32(0), code0))
-    code = jnp.where(code < 0, 1, code)
-    return z * qs, J, aux, code, it, jnp.max(jnp.abs(r)) * KN
+    # shapes of the evaluation's outputs, without tracing the model a second time
+    shapes = jax.eval_shape(evaluate, z0)
+    zeros = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+    init = dict(z=z0, r=zeros[0], Js=zeros[1], J=zeros[2], aux=zeros[3], dz=jnp.zeros(5),
+                t=jnp.float64(0.0), it=jnp.int32(-1), ls=jnp.int32(0), code=jnp.int32(-1))
+    c = lax.while_loop(cond, body, init)
+    return c["z"] * qs, c["J"], c["aux"], c["code"], c["it"], jnp.max(jnp.abs(c["r"])) * KN
 
 
 # ----------------------------------------------------------------------------------------
@@ -431,6 +440,11 @@ def _solve(bearing, op, loads, cage_angle, spall, q0, speed_steps, maxit, rtol, 
 _solve_jit = eqx.filter_jit(_solve)
 
 
+def _traced_tolerances(maxit, rtol, atol):
+    # arrays, not Python scalars: changing a tolerance must not recompile
+    return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
+
+
 class NotConvergedError(RuntimeError):
     """A quasi-static solve did not converge."""
 
@@ -445,6 +459,10 @@ def solve(bearing, op: Operation, loads, cage_angle=0.0, spall: Spall | None = N
     to speed in ``speed_steps`` steps; if that fails it retries once with 8 speed steps.
     Raises :class:`NotConvergedError` (``throw=True``) with the residual and a hint.
     """
+    loads = jnp.asarray(loads, dtype=jnp.float64)
+    cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
+    q0 = None if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
+    maxit, rtol, atol = _traced_tolerances(maxit, rtol, atol)
     sol = _solve_jit(bearing, op, loads, cage_angle, spall, q0, speed_steps, maxit, rtol, atol,
                      hertz_method)
     if int(sol.result) != 0 and speed_steps < 8:
@@ -485,5 +503,6 @@ def solve_batch(bearing, op: Operation, loads, cage_angle=0.0, spall: Spall | No
                        (jnp.broadcast_to(op.speed, (n,)), jnp.broadcast_to(op.centrifugal, (n,)),
                         jnp.broadcast_to(op.gyroscopic, (n,))))
     cage = jnp.broadcast_to(jnp.asarray(cage_angle, dtype=jnp.float64), (n,))
+    maxit, rtol, atol = _traced_tolerances(maxit, rtol, atol)
     return _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,
                             hertz_method)

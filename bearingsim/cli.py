@@ -1,0 +1,212 @@
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|demo``.
+
+Engineering units with the unit in every name; SI inside.  Exit codes: 0 success, 2 bad input,
+3 a solve did not converge, 4 an output could not be written.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+EXIT_INPUT, EXIT_SOLVE, EXIT_OUTPUT = 2, 3, 4
+RAD2DEG = 180.0 / np.pi
+
+
+class CLIError(Exception):
+    def __init__(self, msg, code=EXIT_INPUT):
+        super().__init__(msg)
+        self.code = code
+
+
+def _load(path):
+    from .case import CaseError, load_case
+
+    p = Path(path)
+    if not p.is_file():
+        raise CLIError(f"{path}: no such case file")
+    try:
+        return load_case(p)
+    except CaseError as e:
+        raise CLIError(str(e)) from None
+
+
+def _fmt_table(headers, rows, fmts):
+    cols = [[h] + [f.format(r[i]) for r in rows] for i, (h, f) in enumerate(zip(headers, fmts))]
+    w = [max(len(c) for c in col) for col in cols]
+    lines = ["  ".join(c[0].rjust(wi) for c, wi in zip(cols, w))]
+    lines.append("  ".join("-" * wi for wi in w))
+    for k in range(len(rows)):
+        lines.append("  ".join(c[k + 1].rjust(wi) for c, wi in zip(cols, w)))
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------------ info
+def info_text(case) -> str:
+    import bearingsim as bs
+
+    b = case.bearing()
+    op = case.operation()
+    a0 = float(b.free_contact_angle)
+    out = [f"{case.title}", "=" * len(case.title), "", "Geometry"]
+    rows = [
+        ("balls Z", f"{b.n_balls}"),
+        ("ball diameter D", f"{float(b.ball_diameter)*1e3:.4f} mm"),
+        ("pitch diameter d_m", f"{float(b.pitch_diameter)*1e3:.4f} mm"),
+        ("groove curvature f_i / f_o", f"{float(b.f_inner):.4f} / {float(b.f_outer):.4f}"),
+        ("total conformity B", f"{float(b.B):.4f}"),
+        ("groove-centre distance A = BD", f"{float(b.A)*1e3:.4f} mm"),
+        ("free contact angle alpha_0", f"{a0*RAD2DEG:.3f} deg"),
+        ("diametral clearance P_d", f"{float(b.diametral_clearance)*1e3:.4f} mm"),
+        ("inner groove-centre radius R_i", f"{float(b.inner_groove_radius)*1e3:.4f} mm"),
+        ("outer raceway radius R_o", f"{float(b.outer_raceway_radius)*1e3:.4f} mm"),
+        ("ball mass m / inertia J", f"{float(b.ball_mass)*1e3:.3f} g / {float(b.ball_inertia):.4e} kg m^2"),
+        ("effective modulus E'", f"{float(b.effective_modulus)/1e9:.2f} GPa"),
+    ]
+    out += [f"  {k:<32} {v}" for k, v in rows]
+    out += ["", f"Hertz point contact at alpha_0 ({case.hertz_method})"]
+    hdr = ("contact", "sum_rho (1/mm)", "F(rho)", "kappa", "K(e)", "E(e)", "K (N/mm^1.5)")
+    trs = []
+    for name, inner in (("inner", True), ("outer", False)):
+        c = bs.hertz_contact(b, a0, inner, case.hertz_method)
+        trs.append((name, float(c.sum_rho) / 1e3, float(c.F_rho), float(c.kappa), float(c.K_ell),
+                    float(c.E_ell), float(c.K) / 1e3 ** 1.5))
+    out.append(_fmt_table(hdr, trs, ("{}", "{:.5f}", "{:.5f}", "{:.4f}", "{:.5f}", "{:.5f}", "{:.5g}")))
+    n = float(op.speed_rpm)
+    kin = bs.ball_kinematics(b, op, a0, a0)
+    out += ["", f"Kinematics at alpha_0, {n:.1f} rpm, {op.control} raceway control"]
+    out += [f"  {'orbital (cage) speed':<32} {float(kin.orbital_speed)*60/(2*np.pi):.2f} rpm",
+            f"  {'ball spin speed':<32} {float(kin.spin_speed)*60/(2*np.pi):.2f} rpm",
+            f"  {'spin-axis pitch beta':<32} {float(kin.beta)*RAD2DEG:.3f} deg",
+            f"  {'centrifugal force F_c':<32} {float(kin.centrifugal):.3f} N",
+            f"  {'gyroscopic moment M_g':<32} {float(kin.gyroscopic):.5f} N m"]
+    f = bs.defect_frequencies(b, n / 60.0, a0)
+    out += ["", f"Defect frequencies at alpha_0 (shaft {n/60:.3f} Hz); BSF once per ball revolution"]
+    for name, v in (("FTF", f.ftf), ("BPFO", f.bpfo), ("BPFI", f.bpfi), ("BSF", f.bsf), ("2 BSF", f.two_bsf)):
+        mult = float(v) / (n / 60.0) if n > 0 else float(bs.defect_frequencies(b, 1.0, a0)._asdict()[
+            {"FTF": "ftf", "BPFO": "bpfo", "BPFI": "bpfi", "BSF": "bsf", "2 BSF": "two_bsf"}[name]])
+        out.append(f"  {name:<6} {float(v):10.3f} Hz   {mult:.5f} x shaft")
+    sp = case.spall()
+    if sp is not None:
+        out += ["", "Spall on the outer raceway",
+                f"  centre {float(sp.center)*RAD2DEG:.2f} deg, extent {float(sp.extent)*RAD2DEG:.3f} deg "
+                f"(arc {float(sp.length(b))*1e3:.3f} mm), depth {float(sp.depth)*1e3:.3f} mm, {sp.profile}"]
+    return "\n".join(out)
+
+
+def cmd_info(args):
+    case = _load(args.case)
+    print(info_text(case))
+    return 0
+
+
+# ------------------------------------------------------------------------------------ static
+def solve_case(case, throw=True):
+    import bearingsim as bs
+
+    return bs.solve(case.bearing(), case.operation(), case.loads(), cage_angle=case.cage_angle,
+                    spall=case.spall(), hertz_method=case.hertz_method, throw=throw)
+
+
+def static_text(case, sol) -> str:
+    q = np.asarray(sol.displacement)
+    K = np.asarray(sol.stiffness)
+    lines = [f"{case.title}",
+             f"converged in {int(sol.iterations)} iterations, ring residual {float(sol.residual_norm):.2e} N",
+             f"ring displacement: x {q[0]*1e6:.4f} um, y {q[1]*1e6:.4f} um, axial {q[2]*1e6:.4f} um, "
+             f"tilt_x {q[3]*1e3:.5f} mrad, tilt_y {q[4]*1e3:.5f} mrad",
+             f"cage speed {float(sol.cage_speed)*60/(2*np.pi):.2f} rpm", ""]
+    hdr = ("ball", "psi deg", "a_i deg", "a_o deg", "Q_i N", "Q_o N", "d_i um", "d_o um", "F_c N",
+           "M_g N m", "p_i MPa", "p_o MPa")
+    rows = []
+    for j in range(len(q) and sol.azimuth.shape[0]):
+        rows.append((j, float(np.mod(sol.azimuth[j], 2 * np.pi)) * RAD2DEG, float(sol.alpha_inner[j]) * RAD2DEG,
+                     float(sol.alpha_outer[j]) * RAD2DEG, float(sol.Q_inner[j]), float(sol.Q_outer[j]),
+                     float(sol.delta_inner[j]) * 1e6, float(sol.delta_outer[j]) * 1e6,
+                     float(sol.centrifugal[j]), float(sol.gyroscopic_moment[j]),
+                     float(sol.p_max_inner[j]) * 1e-6, float(sol.p_max_outer[j]) * 1e-6))
+    lines.append(_fmt_table(hdr, rows, ("{}", "{:.2f}", "{:.3f}", "{:.3f}", "{:.1f}", "{:.1f}", "{:.3f}",
+                                        "{:.3f}", "{:.2f}", "{:.4f}", "{:.0f}", "{:.0f}")))
+    lines += ["", "stiffness diagonal: "
+              f"k_x {K[0,0]:.4e} N/m, k_y {K[1,1]:.4e} N/m, k_axial {K[2,2]:.4e} N/m, "
+              f"k_tilt_x {K[3,3]:.4e} N m/rad, k_tilt_y {K[4,4]:.4e} N m/rad"]
+    return "\n".join(lines)
+
+
+def cmd_static(args):
+    import bearingsim as bs
+    from . import io
+
+    case = _load(args.case)
+    sol = solve_case(case, throw=False)
+    if int(sol.result) != 0:
+        raise CLIError(f"{args.case}: the quasi-static solve did not converge: {sol.message()[0]} "
+                       f"(ring residual {float(sol.residual_norm):.3g} N after {int(sol.iterations)} "
+                       "iterations). Hint: check that the bearing can carry these loads (an angular "
+                       "contact bearing needs axial load in its contact direction), or lower the speed.",
+                       EXIT_SOLVE)
+    print(static_text(case, sol))
+    if args.json:
+        io.write_json(args.json, io.static_to_dict(sol))
+        print(f"\nwrote {args.json}")
+    if args.plot:
+        from .plots import plot_static
+
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        plot_static(sol, title=case.title, spall=case.spall(), path=args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+# ------------------------------------------------------------------------------------ demo
+DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "harris218_10krpm.toml"
+
+
+def cmd_demo(args):
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    case_path = Path(args.case) if args.case else DEFAULT_CASE
+    print(f"bearingsim demo: {case_path}\n")
+    case = _load(case_path)
+    print(info_text(case), "\n")
+    ns = argparse.Namespace(case=str(case_path), json=str(out / "static.json"), plot=str(out / "static.png"))
+    cmd_static(ns)
+    print(f"\nall results and plots are in {out.resolve()}")
+    return 0
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="bearingsim", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    s = sub.add_parser("info", help="geometry, Hertz constants, kinematics and defect frequencies of a case")
+    s.add_argument("case")
+    s.set_defaults(func=cmd_info)
+    s = sub.add_parser("static", help="quasi-static Jones solution: per-ball table, displacement, stiffness")
+    s.add_argument("case")
+    s.add_argument("--json", metavar="OUT.json", help="write the solution as JSON")
+    s.add_argument("--plot", metavar="OUT.png", help="polar load distribution and contact angles")
+    s.set_defaults(func=cmd_static)
+    s = sub.add_parser("demo", help="run the default case end to end and write all results and plots")
+    s.add_argument("--case", default=None, help="case file (default: the Harris 218 demo case)")
+    s.add_argument("--out", default="results/demo", help="output folder (default results/demo)")
+    s.set_defaults(func=cmd_demo)
+    return p
+
+
+def main(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except CLIError as e:
+        print(f"bearingsim: error: {e}", file=sys.stderr)
+        return e.code
+    except OSError as e:
+        print(f"bearingsim: error: cannot write output: {e}", file=sys.stderr)
+        return EXIT_OUTPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())
