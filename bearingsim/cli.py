@@ -160,6 +160,130 @@ def cmd_static(args):
     return 0
 
 
+
+# ------------------------------------------------------------------------------------ sweep
+def _progress(total, desc):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="angle", disable=None, dynamic_ncols=True)
+
+
+def run_sweep(case, progress=True, resolve_edges=True):
+    from .sweep import sweep_angles, sweep_chunked
+
+    b, op, loads, spall = case.bearing(), case.operation(), case.loads(), case.spall()
+    st = case.sweep_settings()
+    angles = sweep_angles(b, spall, st["start"], st["stop"], st["steps"], resolve_edges)
+    bar = _progress(len(angles), "sweep") if progress else None
+    try:
+        sol = sweep_chunked(b, op, loads, spall, angles, chunk=max(32, min(256, len(angles))),
+                            progress=None if bar is None else bar.update,
+                            hertz_method=case.hertz_method)
+    finally:
+        if bar is not None:
+            bar.close()
+    return sol
+
+
+def _report_failures(result, what):
+    bad = int(np.sum(np.asarray(result) != 0))
+    if bad:
+        print(f"bearingsim: warning: {bad} of {np.asarray(result).size} {what} did not converge; they are "
+              "flagged in 'converged' (values set to 0)", file=sys.stderr)
+    return bad
+
+
+def cmd_sweep(args):
+    from . import io
+
+    case = _load(args.case)
+    sol = run_sweep(case)
+    _report_failures(sol.result, "cage angles")
+    groups = {"sweep": io.state_datasets(sol)}
+    io.write_h5(args.output, groups, attrs={"case_toml": case.text, "title": case.title})
+    th = np.asarray(sol.cage_angle) * RAD2DEG
+    Qo = np.asarray(sol.Q_outer)
+    print(f"{case.title}: {len(th)} cage angles from {th[0]:.3f} to {th[-1]:.3f} deg, "
+          f"max Q_o {Qo.max():.1f} N, min Q_o {Qo.min():.1f} N")
+    print(f"wrote {args.output}")
+    if args.plot:
+        from .plots import plot_sweep
+
+        d = Path(args.plot)
+        d.mkdir(parents=True, exist_ok=True)
+        plot_sweep(sol, title=case.title, spall=case.spall(), path=d / "sweep.png")
+        print(f"wrote {d / 'sweep.png'}")
+    return 0
+
+
+# ------------------------------------------------------------------------------------ study
+def run_study(case, progress=True):
+    import jax
+    import jax.numpy as jnp
+
+    from .sweep import sweep
+
+    spec = case.study_settings()
+    if spec is None:
+        raise CLIError(f"{case.source}: no [study] section: add one, e.g.\n[study]\n"
+                       'parameter = "operation.speed_rpm"\nvalues = [0, 5000, 10000]')
+    param, values = spec
+    if param == "bearing.balls":
+        raise CLIError(f"{case.source}: study.parameter = 'bearing.balls' changes the number of balls "
+                       "and so the shape of every result; run one sweep per ball count instead")
+    from tqdm import tqdm
+
+    sols = []
+    for v in tqdm(values, desc=f"study {param}", unit="value", disable=None if progress else True):
+        c = case.with_value(param, v)
+        b, op, loads, spall = c.bearing(), c.operation(), c.loads(), c.spall()
+        st = c.sweep_settings()
+        # one uniform grid for every value, so the study is one rectangular array
+        sols.append(sweep(b, op, loads, spall, start=st["start"], stop=st["stop"], steps=st["steps"],
+                          resolve_edges=False, hertz_method=c.hertz_method))
+    stacked = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
+    return param, list(values), stacked
+
+
+def _unit_of(param):
+    last = param.split(".")[-1]
+    for suffix in ("_rpm", "_deg", "_mm", "_N", "_Nm", "_GPa", "_kg_m3", "_s", "_Hz"):
+        if last.endswith(suffix):
+            return suffix[1:]
+    return ""
+
+
+def cmd_study(args):
+    from . import io
+
+    case = _load(args.case)
+    param, values, sol = run_study(case)
+    _report_failures(sol.result, "study states")
+    ds = io.state_datasets(sol)
+    unit = _unit_of(param)
+    ds["values"] = (np.asarray(values, dtype=float), unit or "1")
+    ds["@attrs"] = {"parameter": param}
+    io.write_h5(args.output, {"study": ds}, attrs={"case_toml": case.text, "title": case.title})
+    print(f"{case.title}: study of {param} over {values}")
+    Qo = np.asarray(sol.Q_outer)
+    Qi = np.asarray(sol.Q_inner)
+    ai, ao = np.asarray(sol.alpha_inner) * RAD2DEG, np.asarray(sol.alpha_outer) * RAD2DEG
+    rows = [(v, Qi[m].max(), Qo[m].max(), ai[m].min(), ai[m].max(), ao[m].min(), ao[m].max())
+            for m, v in enumerate(values)]
+    print(_fmt_table((param, "max Q_i N", "max Q_o N", "min a_i", "max a_i", "min a_o", "max a_o"), rows,
+                     ("{:g}", "{:.1f}", "{:.1f}", "{:.2f}", "{:.2f}", "{:.2f}", "{:.2f}")))
+    print(f"wrote {args.output}")
+    if args.plot:
+        from .plots import plot_study
+
+        d = Path(args.plot)
+        d.mkdir(parents=True, exist_ok=True)
+        name = "study_" + param.replace(".", "_") + ".png"
+        plot_study(sol, values, param, unit, title=case.title, spall=case.spall(), path=d / name)
+        print(f"wrote {d / name}")
+    return 0
+
+
 # ------------------------------------------------------------------------------------ demo
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "harris218_10krpm.toml"
 
@@ -188,6 +312,16 @@ def build_parser():
     s.add_argument("--json", metavar="OUT.json", help="write the solution as JSON")
     s.add_argument("--plot", metavar="OUT.png", help="polar load distribution and contact angles")
     s.set_defaults(func=cmd_static)
+    s = sub.add_parser("sweep", help="quasi-static states over cage angles as the balls pass the spall")
+    s.add_argument("case")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
+    s.add_argument("--plot", metavar="DIR", help="write plots into DIR")
+    s.set_defaults(func=cmd_sweep)
+    s = sub.add_parser("study", help="a cage-angle sweep for each value of one case key ([study])")
+    s.add_argument("case")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
+    s.add_argument("--plot", metavar="DIR", help="write plots into DIR")
+    s.set_defaults(func=cmd_study)
     s = sub.add_parser("demo", help="run the default case end to end and write all results and plots")
     s.add_argument("--case", default=None, help="case file (default: the Harris 218 demo case)")
     s.add_argument("--out", default="results/demo", help="output folder (default results/demo)")

@@ -131,3 +131,46 @@ def write_h5(path, groups: dict, attrs: dict | None = None):
                     if len(spec) > 2 and spec[2]:
                         for ak, av in spec[2].items():
                             ds.attrs[ak] = av
+
+
+STIFFNESS_UNITS = ("N/m, N/rad, N m/m, N m/rad: row = load [Fx, Fy, Fz, Mx, My], "
+                   "column = displacement [x, y, axial, tilt_x, tilt_y]")
+
+# name in the results file -> (JonesSolution field, units)
+_STATE_FIELDS = {
+    "cage_angle": ("cage_angle", "rad"),
+    "azimuth": ("azimuth", "rad"),
+    "alpha_inner": ("alpha_inner", "rad"),
+    "alpha_outer": ("alpha_outer", "rad"),
+    "Q_inner": ("Q_inner", "N"),
+    "Q_outer": ("Q_outer", "N"),
+    "delta_inner": ("delta_inner", "m"),
+    "delta_outer": ("delta_outer", "m"),
+    "centrifugal": ("centrifugal", "N"),
+    "gyroscopic_moment": ("gyroscopic_moment", "N m"),
+    "orbital_speed": ("orbital_speed", "rad/s"),
+    "spall_depth": ("spall_depth", "m"),
+    "p_max_inner": ("p_max_inner", "Pa"),
+    "p_max_outer": ("p_max_outer", "Pa"),
+    "ring_displacement": ("displacement", "x, y, axial in m; tilt_x, tilt_y in rad"),
+    "stiffness": ("stiffness", STIFFNESS_UNITS),
+    "iterations": ("iterations", "1"),
+    "residual_norm": ("residual_norm", "N"),
+    "result": ("result", "1 (0 = converged; see bearingsim.RESULT_MESSAGES)"),
+}
+
+
+def state_datasets(sol):
+    """Datasets of a batch of quasi-static states (sweep: leading (N,), study: (M, N)).
+
+    States that did not converge are flagged in ``converged`` and their values set to 0 (never
+    NaN in a results file)."""
+    ok = np.asarray(sol.result) == 0
+    out = {"converged": (ok, "bool (True where the solve converged)")}
+    for name, (field, units) in _STATE_FIELDS.items():
+        a = np.asarray(getattr(sol, field))
+        if a.dtype.kind == "f":
+            mask = ok.reshape(ok.shape + (1,) * (a.ndim - ok.ndim))
+            a = np.where(mask & np.isfinite(a), a, 0.0) if not np.all(ok) else a
+        out[name] = (a, units)
+    return out

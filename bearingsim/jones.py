@@ -34,7 +34,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .defect import NO_SPALL, Spall, depth_profile, wrap_angle
+from .defect import NO_SPALL, Spall, depth_profile
 from .hertz import chebyshev_eval, hertz_contact, semi_axes, stiffness_curve
 from .kinematics import Operation, ball_kinematics
 
@@ -108,14 +108,7 @@ def ball_state(bearing, op: Operation, x, A1, A2, H_def, curve, wm_undropped=Non
     K_o = chebyshev_eval(curve.outer, X2 / Lo)
     Q_i = K_i * jnp.maximum(delta_i, 0.0) ** 1.5
     Q_o = K_o * jnp.maximum(delta_o, 0.0) ** 1.5
-    # Kinematics use the geometric inner angle.  A ball far off its inner raceway (a gap of
-    # the order of the groove radius) has a meaningless inner "angle" that can make
-    # k_i + k_o vanish; it is kept within 60 degrees of the outer angle (never active for a
-    # ball in, or near, inner contact).
-    lim = jnp.pi / 3.0
-    alpha_i_kin = jnp.where(delta_i > 0.0, alpha_i,
-                            alpha_o + jnp.clip(wrap_angle(alpha_i - alpha_o), -lim, lim))
-    kin = ball_kinematics(bearing, op, alpha_i_kin, alpha_o)
+    kin = ball_kinematics(bearing, op, alpha_i, alpha_o)
     wm, Fc, Mg = kin.orbital_speed, kin.centrifugal, kin.gyroscopic
     if wm_undropped is not None:
         # not driven by the inner ring over the spall: the cage carries it (MODEL.md 5)

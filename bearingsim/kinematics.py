@@ -11,6 +11,7 @@ import jax.numpy as jnp
 
 #: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
 CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)}
+_COS_FLOOR = 0.05
 
 
 def _f64(x):
@@ -69,8 +70,11 @@ def ball_kinematics(bearing, op: Operation, alpha_i, alpha_o) -> BallKinematics:
         beta = jnp.arctan2(jnp.sin(alpha_i), jnp.cos(alpha_i) - g)
     else:
         beta = jnp.arctan2(jnp.sin(alpha_o), jnp.cos(alpha_o) + g)
-    k_i = (1.0 - g * jnp.cos(alpha_i)) / jnp.cos(alpha_i - beta)
-    k_o = (1.0 + g * jnp.cos(alpha_o)) / jnp.cos(alpha_o - beta)
+    # cos(alpha - beta) -> 0 only for a ball far off a raceway (its geometric "contact angle"
+    # is then meaningless); the floor keeps omega_m finite there and is inactive (|alpha - beta|
+    # < 87 deg) for every ball in or near contact
+    k_i = (1.0 - g * jnp.cos(alpha_i)) / jnp.maximum(jnp.cos(alpha_i - beta), _COS_FLOOR)
+    k_o = (1.0 + g * jnp.cos(alpha_o)) / jnp.maximum(jnp.cos(alpha_o - beta), _COS_FLOOR)
     w = op.speed
     w_m = w * k_i / (k_i + k_o)
     w_R = w * k_i * k_o / ((k_i + k_o) * g)

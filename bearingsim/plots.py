@@ -90,3 +90,154 @@ def plot_static(sol, title="", spall=None, path=None):
         fig.savefig(path, dpi=130)
         plt.close(fig)
     return fig
+
+
+# ------------------------------------------------------------------------------- sweeps
+_QUANTITIES = [("alpha_inner", r"$\alpha_i$ (deg)", RAD2DEG), ("alpha_outer", r"$\alpha_o$ (deg)", RAD2DEG),
+               ("Q_inner", r"$Q_i$ (N)", 1.0), ("Q_outer", r"$Q_o$ (N)", 1.0)]
+
+
+def _take(sol, n):
+    import jax
+
+    return jax.tree_util.tree_map(lambda a: a[n] if np.ndim(a) > 0 else a, sol)
+
+
+def spall_traces(sweep_sol, center=0.0):
+    """Follow the balls past the spall.  For every cage angle, the ball nearest the spall centre
+    (k = 0) and its neighbours (k = -1 trailing, +1 leading): returns u (deg, position of the
+    nearest ball relative to the spall centre, sorted) and {name: (N, 3) array for k = -1, 0, 1}.
+    Over one ball pitch this covers every configuration of the ball set relative to the spall."""
+    psi = np.asarray(sweep_sol.azimuth)
+    u_all = np.mod(psi - center + np.pi, 2 * np.pi) - np.pi
+    near = np.argmin(np.abs(u_all), axis=1)
+    Z = psi.shape[1]
+    n = np.arange(psi.shape[0])
+    u = u_all[n, near] * RAD2DEG
+    order = np.argsort(u, kind="stable")
+    out = {}
+    for name, _, _ in _QUANTITIES:
+        v = np.asarray(getattr(sweep_sol, name))
+        out[name] = np.stack([v[n, (near + k) % Z] for k in (-1, 0, 1)], axis=1)[order]
+    ok = (np.asarray(sweep_sol.result) == 0)[order]
+    return u[order], out, ok
+
+
+def _center(spall):
+    return 0.0 if spall is None else float(spall.center)
+
+
+def plot_sweep(sweep_sol, title="", spall=None, path=None):
+    """As the balls pass the spall: contact angles and loads of the ball nearest the spall and
+    of its neighbours against its position relative to the spall centre; ring displacement and
+    cage speed against cage angle; polar load distribution with a ball at the spall centre."""
+    fig = plt.figure(figsize=(13, 8.5), constrained_layout=True)
+    gs = fig.add_gridspec(3, 3)
+    u, tr, ok = spall_traces(sweep_sol, _center(spall))
+    half = None if spall is None else 0.5 * float(spall.extent) * RAD2DEG
+    styles = [("trailing neighbour", "--", "0.45"), ("ball over the spall", "-", None), ("leading neighbour", ":", "0.2")]
+    for k, (name, label, f) in enumerate(_QUANTITIES):
+        ax = fig.add_subplot(gs[k // 2, k % 2])
+        if half is not None and float(spall.depth) > 0:
+            ax.axvspan(-half, half, color="0.55", alpha=0.3, lw=0, label="spall")
+        col = C_IN if "inner" in name else C_OUT
+        for i, (lab, ls, c) in enumerate(styles):
+            ax.plot(u[ok], tr[name][ok, i] * f, ls, color=c or col, lw=1.5 if i == 1 else 1.1, label=lab)
+        ax.set_xlabel("position of the nearest ball relative to the spall centre (deg)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        if k == 0:
+            ax.legend(fontsize=8)
+    th = np.asarray(sweep_sol.cage_angle) * RAD2DEG
+    q = np.asarray(sweep_sol.displacement)
+    ax = fig.add_subplot(gs[2, :2])
+    for j, lab in enumerate(["x", "y", "axial"]):
+        ax.plot(th, q[:, j] * 1e6, label=f"{lab} (µm)")
+    ax2 = ax.twinx()
+    ax2.plot(th, q[:, 3] * 1e3, ":", color="0.3", label="tilt x (mrad)")
+    ax2.plot(th, q[:, 4] * 1e3, "--", color="0.5", label="tilt y (mrad)")
+    ax2.set_ylabel("tilt (mrad)")
+    ax.set_xlabel("cage angle θ_c (deg)")
+    ax.set_ylabel("ring displacement (µm)")
+    ax.grid(alpha=0.3)
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, ncol=5, loc="best")
+    bad = np.asarray(sweep_sol.result) != 0
+    for t in th[bad]:
+        ax.axvline(t, color="red", alpha=0.4)
+    psi = np.asarray(sweep_sol.azimuth)
+    uu = np.abs(np.mod(psi - _center(spall) + np.pi, 2 * np.pi) - np.pi).min(axis=1)
+    n = int(np.argmin(uu))
+    axp = fig.add_subplot(gs[:2, 2], projection="polar")
+    polar_loads(axp, _take(sweep_sol, n), spall, title=f"Ball loads, θ_c = {th[n]:.2f}°")
+    axc = fig.add_subplot(gs[2, 2])
+    axc.plot(th, np.asarray(sweep_sol.cage_speed) * 60 / (2 * np.pi), color="k")
+    axc.set_xlabel("cage angle θ_c (deg)")
+    axc.set_ylabel("mean orbital (cage) speed (rpm)")
+    axc.grid(alpha=0.3)
+    axc.ticklabel_format(useOffset=False)
+    if np.any(bad):
+        fig.text(0.01, 0.01, f"{int(bad.sum())} angle(s) did not converge (red lines)", color="red")
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_study(study_sols, values, parameter, unit_label="", title="", spall=None, path=None):
+    """Paper-style study: alpha_i, alpha_o, Q_i, Q_o of every ball against its azimuth with a
+    ball at the spall centre, one curve per value, spall shaded; the ball passing the spall
+    against its position; polar distribution of Q_o."""
+    fig = plt.figure(figsize=(15, 8.5), constrained_layout=True)
+    gs = fig.add_gridspec(2, 3)
+    cmap = plt.get_cmap("viridis")
+    colors = [cmap(x) for x in np.linspace(0.0, 0.9, len(values))]
+    span = _spall_span(spall)
+    axes = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 0]),
+            fig.add_subplot(gs[1, 1])]
+    axp = fig.add_subplot(gs[0, 2], projection="polar")
+    axt = fig.add_subplot(gs[1, 2])
+    rmax = 0.0
+    for m, (v, c) in enumerate(zip(values, colors)):
+        s = _take(study_sols, m)
+        psi = np.asarray(s.azimuth)
+        uu = np.abs(np.mod(psi - _center(spall) + np.pi, 2 * np.pi) - np.pi).min(axis=1)
+        one = _take(s, int(np.argmin(uu)))
+        az = np.mod(np.asarray(one.azimuth), 2 * np.pi)
+        order = np.argsort(az)
+        lab = f"{v:g} {unit_label}".strip()
+        for ax, (name, label, f) in zip(axes, _QUANTITIES):
+            ax.plot(az[order] * RAD2DEG, np.asarray(getattr(one, name))[order] * f, "-o", ms=3.5,
+                    color=c, lw=1.3, label=lab)
+        Qo = np.asarray(one.Q_outer)[order]
+        rmax = max(rmax, float(Qo.max()))
+        axp.plot(_closed(az[order]), _closed(Qo), "-o", ms=3, color=c, lw=1.2)
+        u, tr, ok = spall_traces(s, _center(spall))
+        axt.plot(u[ok], tr["Q_outer"][ok, 1], color=c, lw=1.4, label=lab)
+        axt.plot(u[ok], tr["Q_inner"][ok, 1], "--", color=c, lw=1.0)
+    for ax, (name, label, f) in zip(axes, _QUANTITIES):
+        _shade_azimuth(ax, span, label=False)
+        ax.set_xlim(0, 360)
+        ax.set_xticks(np.arange(0, 361, 45))
+        ax.set_xlabel("ball azimuth ψ (deg)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(title=parameter, fontsize=8, title_fontsize=8)
+    if span is not None:
+        axp.fill_between(np.linspace(span[0], span[1], 30), 0, rmax * 1.1, color="0.55", alpha=0.3, lw=0)
+        half = 0.5 * float(spall.extent) * RAD2DEG
+        axt.axvspan(-half, half, color="0.55", alpha=0.3, lw=0)
+    axp.set_ylim(0, rmax * 1.1)
+    axp.set_title("$Q_o$ (N), a ball at the spall centre", pad=14)
+    axt.set_xlabel("ball position relative to the spall centre (deg)")
+    axt.set_ylabel("$Q_o$ (solid), $Q_i$ (dashed) of the passing ball (N)")
+    axt.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig

@@ -1,5 +1,6 @@
 """Jones quasi-static model (MODEL.md section 4) against closed forms, published values,
 global equilibrium, symmetry and limits."""
+import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -102,21 +103,29 @@ TABLE_7_4 = [  # eps, Fr tan a / Fa, J_r, J_a
 ]
 
 
+@functools.lru_cache(maxsize=None)
+def _sjovall_map(Z):
+    b = bs.Bearing(Z, 2e-3, 125.26e-3, 0.5232, 0.5232, 40 * DEG)
+    op = bs.Operation.from_rpm(0.0)
+    psi = b.ball_azimuths(0.0)
+    curve = bs.hertz.stiffness_curve(b)
+
+    @jax.jit
+    def f(q):
+        st_ = jones.balls_at(b, op, q, psi, None, curve)[0]
+        return jnp.max(st_.Q_i), jones._reactions_from_balls(st_, psi)
+
+    return f
+
+
 def _sjovall(Z, eps):
     """Translate the ring so that the loaded arc has the given eps (no tilt, tiny deflection so
     alpha stays alpha_0) and read J_r, J_a off the Jones load-displacement map."""
-    b = bs.Bearing(Z, 2e-3, 125.26e-3, 0.5232, 0.5232, 40 * DEG)
     a0 = 40 * DEG
     dr = 1e-8
     da = (2 * eps - 1) * dr / np.tan(a0)
-    # ball j at psi = 0 carries the most; ring displacement along the contact normal
-    q = jnp.array([dr, 0.0, da, 0.0, 0.0])
-    op = bs.Operation.from_rpm(0.0)
-    psi = b.ball_azimuths(0.0)
-    st_, R = jax.jit(lambda q: (lambda s: (s, jones._reactions_from_balls(s, psi)))(
-        jones.balls_at(b, op, q, psi, None, bs.hertz.stiffness_curve(b))[0]))(q)
-    Qmax = float(np.max(st_.Q_i))
-    Fr, Fa = float(R[0]), float(R[2])
+    Qmax, R = _sjovall_map(Z)(jnp.array([dr, 0.0, da, 0.0, 0.0]))
+    Qmax, Fr, Fa = float(Qmax), float(R[0]), float(R[2])
     return Fr / (Z * Qmax * np.cos(a0)), Fa / (Z * Qmax * np.sin(a0)), Fr * np.tan(a0) / Fa
 
 
