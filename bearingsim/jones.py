@@ -213,12 +213,19 @@ def balls_at(bearing, op, q, psi, spall: Spall | None, curve):
         H_def = depth_profile(bearing, spall, psi)
 
     def one(a1, a2, h):
-        wm0 = None
-        if spall is not None:
-            x_und = solve_ball(bearing, op, a1, a2, 0.0, curve)
-            wm0 = ball_state(bearing, op, x_und, a1, a2, 0.0, curve).omega_m
-        x = solve_ball(bearing, op, a1, a2, h, curve, wm0)
-        return ball_state(bearing, op, x, a1, a2, h, curve, wm0)
+        if spall is None:
+            x = solve_ball(bearing, op, a1, a2, h, curve)
+            return ball_state(bearing, op, x, a1, a2, h, curve)
+
+        # two passes through one traced ball solve: first without the spall (the undropped
+        # position gives the orbital speed of a ball the cage carries), then with it
+        def passage(wm0, hh):
+            x = solve_ball(bearing, op, a1, a2, hh, curve, wm0)
+            st = ball_state(bearing, op, x, a1, a2, hh, curve, wm0)
+            return st.omega_m, st
+
+        _, sts = lax.scan(passage, jnp.zeros_like(a1), jnp.stack([jnp.zeros_like(h), h]))
+        return jax.tree_util.tree_map(lambda a: a[1], sts)
 
     return jax.vmap(one)(A1, A2, H_def), H_def
 

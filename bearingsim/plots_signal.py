@@ -1,0 +1,163 @@
+"""Plots for the signal stage: envelope spectrum with defect markers, time history with events.
+
+matplotlib with the Agg backend (no display needed).  Each function draws into
+``ax`` when given (so figures can be composed), otherwise into a new figure;
+it returns the Figure and saves it at 120 dpi when ``path`` is given.
+"""
+from __future__ import annotations
+
+import re
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.transforms as mtransforms  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .signal import EnvelopeSpectrum, Spectrum, _check_signal, defect_markers  # noqa: E402
+
+__all__ = ["plot_envelope_spectrum", "plot_time_history"]
+
+# colours per marker family; anything else cycles through _OTHER
+_FAMILY_COLOURS = {"BPFO": "#d62728", "BPFI": "#9467bd", "BSF": "#8c564b", "2BSF": "#8c564b",
+                   "FTF": "#2ca02c", "SHAFT": "#1f77b4"}
+_OTHER = ["#ff7f0e", "#17becf", "#e377c2", "#bcbd22", "#7f7f7f"]
+_HARM = re.compile(r"^(\d+)\s*[x×*]\s*(.+)$")
+_DPI = 120
+_MAX_LINES = 30    # event marks drawn as full-height lines up to this many in view
+
+
+def _family(label: str) -> tuple[str, int]:
+    m = _HARM.match(label)
+    return (m.group(2), int(m.group(1))) if m else (label, 1)
+
+
+def _new_axes(ax, figsize):
+    if ax is None:
+        fig, ax = plt.subplots(figsize=figsize, constrained_layout=True)
+    else:
+        fig = ax.figure
+    return fig, ax
+
+
+def _finish(fig, path):
+    if path is not None:
+        fig.savefig(path, dpi=_DPI)
+    return fig
+
+
+def plot_envelope_spectrum(spectrum: Spectrum, markers, title: str = "", fmax=None, path=None, ax=None,
+                           unit: str = "m/s²"):
+    """Squared-envelope spectrum (linear amplitude) with labelled defect-frequency markers.
+
+    spectrum : :class:`~bearingsim.signal.EnvelopeSpectrum` (a plain ``Spectrum`` also works)
+    markers  : list of ``(label, frequency_Hz)`` as from :func:`~bearingsim.signal.defect_markers`
+               (a dict is expanded with it).  ``"kxNAME"`` labels are drawn as harmonics of
+               NAME in the same colour; BPFO is red, FTF green, shaft blue, others distinct.
+    fmax     : upper frequency limit (Hz); default 1.2 x the highest marker (capped at fs/2).
+    unit     : unit of the analysed signal; the envelope amplitude is in unit².
+    """
+    if not isinstance(spectrum, Spectrum):
+        raise TypeError(f"spectrum must be a Spectrum/EnvelopeSpectrum, got {type(spectrum).__name__}")
+    if isinstance(markers, dict):
+        markers = defect_markers(markers)
+    markers = [(str(lab), float(f)) for lab, f in (markers or [])]
+    f_nyq = float(spectrum.freqs[-1])
+    if fmax is None:
+        fmax = 1.2 * max(f for _, f in markers) if markers else f_nyq
+    fmax = min(float(fmax), f_nyq)
+    if not fmax > 0:
+        raise ValueError(f"fmax must be > 0 Hz, got {fmax}")
+
+    fig, ax = _new_axes(ax, (10, 4.2))
+    sel = spectrum.freqs <= fmax
+    f, a = spectrum.freqs[sel], spectrum.amplitude[sel]
+    is_env = isinstance(spectrum, EnvelopeSpectrum) or spectrum.band is not None
+    ax.plot(f, a, color="0.15", lw=0.9, label="squared-envelope spectrum" if is_env else "amplitude spectrum")
+    amax = float(a[f > 0].max()) if np.any(f > 0) and a[f > 0].max() > 0 else 1.0
+    ax.set_ylim(0.0, 1.32 * amax)
+    ax.set_xlim(0.0, fmax)
+
+    trans = mtransforms.blended_transform_factory(ax.transData, ax.transAxes)
+    colours, seen, other = {}, set(), iter(_OTHER * 10)
+    for lab, fm in markers:
+        fam, k = _family(lab)
+        key = fam.upper()
+        if key not in colours:
+            colours[key] = _FAMILY_COLOURS.get(key) or next(other)
+        c = colours[key]
+        if not (0.0 < fm <= fmax):
+            continue
+        leg = None
+        if key not in seen:
+            seen.add(key)
+            leg = f"{fam} & harmonics" if any(_family(m)[0].upper() == key and _family(m)[1] > 1
+                                               for m, _ in markers) else fam
+        ax.axvline(fm, color=c, ls="--", lw=1.1 if k == 1 else 0.9, alpha=0.85, label=leg, zorder=1)
+        text = fam if k == 1 else f"{k}×{fam}"
+        ax.text(fm, 0.985, f" {text} ", transform=trans, rotation=90, ha="right", va="top",
+                fontsize=8.5, color=c, clip_on=True,
+                bbox=dict(boxstyle="square,pad=0.1", fc="white", ec="none", alpha=0.8))
+
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel(f"squared-envelope amplitude (({unit})²)" if is_env else f"amplitude ({unit})")
+    ax.grid(alpha=0.3)
+    leg_title = None
+    if spectrum.band is not None:
+        lo, hi = spectrum.band
+        leg_title = f"band {lo:.0f}–{hi:.0f} Hz"
+    ax.legend(loc="upper right", fontsize=8, title=leg_title, title_fontsize=8, framealpha=0.9,
+              bbox_to_anchor=(1.0, 0.80))
+    if title:
+        ax.set_title(title)
+    return _finish(fig, path)
+
+
+def plot_time_history(t, x, marks=None, title: str = "", path=None, ax=None, zoom=None,
+                      ylabel: str = "acceleration (m/s²)", marks_label: str = "spall pass"):
+    """Signal against time with vertical lines at event times (e.g. spall passes).
+
+    zoom : optional ``(t0, t1)`` window in s; only that part is drawn and y is scaled to it.
+    marks : event times in s; up to 30 in view are drawn as dotted full-height lines,
+            more as a row of small ticks along the top edge (keeps long records readable).
+    The time axis is shown in ms when the visible span is shorter than 0.1 s.
+    """
+    t = _check_signal(t, "t")
+    x = _check_signal(x, "x")
+    if t.size != x.size:
+        raise ValueError(f"t and x must have the same length, got {t.size} and {x.size}")
+    if zoom is not None:
+        t0, t1 = (float(v) for v in zoom)
+        if not t0 < t1:
+            raise ValueError(f"zoom must be (t0, t1) with t0 < t1, got {zoom!r}")
+        sel = (t >= t0) & (t <= t1)
+        if not sel.any():
+            raise ValueError(f"zoom window {zoom!r} contains no samples (t spans {t[0]:g}–{t[-1]:g} s)")
+        t, x = t[sel], x[sel]
+    else:
+        t0, t1 = float(t[0]), float(t[-1])
+    scale, tunit = (1e3, "ms") if (t1 - t0) < 0.1 else (1.0, "s")
+
+    fig, ax = _new_axes(ax, (10, 3.8))
+    ax.plot(t * scale, x, color="#1f77b4", lw=0.6, label="signal")
+    if marks is not None:
+        mk = np.asarray(marks, dtype=float).ravel()
+        mk = mk[(mk >= t0) & (mk <= t1)]
+        if mk.size > _MAX_LINES:    # too many for full-height lines: a rug of ticks on the top edge
+            trans = mtransforms.blended_transform_factory(ax.transData, ax.transAxes)
+            ax.plot(mk * scale, np.full(mk.size, 0.985), ls="none", marker="v", ms=4.5, color="#d62728",
+                    transform=trans, clip_on=False, label=f"{marks_label} ({mk.size})", zorder=3)
+        for i, tm in enumerate(mk if mk.size <= _MAX_LINES else []):
+            ax.axvline(tm * scale, color="#d62728", ls=":", lw=1.0, alpha=0.8,
+                       label=marks_label if i == 0 else None, zorder=0)
+    ax.set_xlim(t0 * scale, t1 * scale)
+    ymax = float(np.max(np.abs(x))) or 1.0
+    ax.set_ylim(-1.15 * ymax, 1.15 * ymax)
+    ax.set_xlabel(f"time ({tunit})")
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9, bbox_to_anchor=(1.0, 0.94))
+    if title:
+        ax.set_title(title)
+    return _finish(fig, path)
