@@ -79,6 +79,11 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "kg_m3": (1.0, "kg/m^3", "kg/m^3"),
     "s": (1.0, "s", "s"),
     "Hz": (1.0, "Hz", "Hz"),
+    "kg": (1.0, "kg", "kg"),
+    "kg_m": (1.0, "kg m", "kg m"),
+    "N_per_m": (1.0, "N/m", "N/m"),
+    "Ns_per_m": (1.0, "N s/m", "N s/m"),
+    "m_s2": (1.0, "m/s^2", "m/s^2"),
 }
 
 
@@ -334,6 +339,30 @@ SCHEMA: dict[str, Section] = {
         {
             "duration_s": _num("simulated time", "s", 1.0, gt=0),
             "sample_rate_Hz": _num("output sample rate of the signals", "Hz", 48000.0, gt=0),
+            "shaft_mass_kg": _num("mass m_s of the inner ring and the shaft/rotor it carries "
+                                  "(translations x, y, axial)", "kg", 2.0, gt=0),
+            "housing_mass_kg": _num("mass m_h of the outer ring and housing (x, y)", "kg", 5.0, gt=0),
+            "housing_stiffness_N_per_m": _num("support stiffness k_h of the housing (x and y)",
+                                              "N_per_m", 5e7, gt=0),
+            "housing_damping_Ns_per_m": _num("support damping c_h of the housing (x and y)",
+                                             "Ns_per_m", 2000.0, ge=0),
+            "resonance_frequency_Hz": _num("natural frequency f_n of the structural resonator on the "
+                                           "housing (x); the sensor measures its acceleration",
+                                           "Hz", 3000.0, gt=0),
+            "resonance_damping_ratio": _num("damping ratio zeta of the resonator", "", 0.05, gt=0, lt=1),
+            "resonator_mass_kg": _num("mass m_r of the resonator (its reaction acts on the housing)",
+                                      "kg", 0.05, gt=0),
+            "contact_damping_ratio": _num("bearing contact damping: c_b = 2 zeta_b sqrt(k m_s) per "
+                                          "direction with k the quasi-static stiffness diagonal (x, y, axial)",
+                                          "", 0.05, ge=0, lt=2),
+            "unbalance_kg_m": _num("rotating unbalance m_u e of the shaft (force m_u e omega^2 at shaft "
+                                   "speed, along +x at t = 0)", "kg_m", 0.0, ge=0),
+            "noise_rms_m_s2": _num("white Gaussian noise added to the sensor acceleration (rms)",
+                                   "m_s2", 0.0, ge=0),
+            "seed": _int("seed of the noise generator", 0, ge=0),
+            "rtol": _num("relative tolerance of the adaptive time integration", "", 1e-6, gt=0, lt=1),
+            "atol": _num("absolute tolerance of the time integration, on displacements in um and "
+                         "velocities in mm/s", "", 1e-6, gt=0),
         },
     ),
 }

@@ -285,19 +285,25 @@ def cmd_study(args):
 
 
 # ------------------------------------------------------------------------------------ demo
-DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "harris218_10krpm.toml"
+DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "demo.toml"
 
 
 def cmd_demo(args):
+    import time
+
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     case_path = Path(args.case) if args.case else DEFAULT_CASE
-    print(f"bearingsim demo: {case_path}\n")
     case = _load(case_path)
+    t0 = time.time()
+    print(f"bearingsim demo: {case_path}\n")
     print(info_text(case), "\n")
-    ns = argparse.Namespace(case=str(case_path), json=str(out / "static.json"), plot=str(out / "static.png"))
-    cmd_static(ns)
-    print(f"\nall results and plots are in {out.resolve()}")
+    print("[1/2] quasi-static solve (compiles once, ~10 s)")
+    cmd_static(argparse.Namespace(case=str(case_path), json=str(out / "static.json"),
+                                  plot=str(out / "static.png")))
+    print("\n[2/2] cage-angle sweep past the spall")
+    cmd_sweep(argparse.Namespace(case=str(case_path), output=str(out / "sweep.h5"), plot=str(out)))
+    print(f"\ndone in {time.time() - t0:.0f} s; all results and plots are in {out.resolve()}")
     return 0
 
 
