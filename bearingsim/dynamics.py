@@ -483,3 +483,59 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
         jnp.asarray(ts), jump_ts, dtmax, jnp.float64(rtol), jnp.float64(atol), max_steps, keys,
         jnp.float64(noise_rms))
     return DynamicsBatchResult(ts, a_r, rel, code, nsteps, wc, bearing.n_balls * wc / (2 * np.pi))
+
+
+# ------------------------------------------------------------------------- lean ball solver
+def _solve_ball_fixed(bearing, op, A1, A2, H_def, curve, wm_undropped, iterations):
+    """Ball-centre position by ``iterations`` damped Newton steps from the omega = 0 closed
+    form (the Newton step of ``jones.solve_ball``, without its while loop / implicit
+    differentiation): cheap enough for the right-hand side of the time integration."""
+    from .jones import UM, KN, _static_ball_position, ball_state
+
+    D = bearing.ball_diameter
+    cap = 2e-3 * D / UM
+    x0, d_c = _static_ball_position(bearing, op, A1, A2, H_def, curve)
+
+    def f(y):
+        st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
+        return jnp.stack([st.r_axial, st.r_radial]) / KN
+
+    def body(_, y):
+        J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
+        mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
+        dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
+        n = jnp.max(jnp.abs(dy))
+        dy = jnp.where(n > cap, dy * (cap / n), dy)
+        dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, 0.0)
+        y_new = y + dy
+        Lo = jnp.sqrt(y_new[0] ** 2 + y_new[1] ** 2) * UM
+        d_o = Lo - (bearing.f_outer - 0.5) * D - H_def
+        lift = (d_c > 0.0) & (d_o <= 0.0)
+        target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
+        return jnp.where(lift, y_new * target, y_new)
+
+    y = jax.lax.fori_loop(0, iterations, body, x0 / UM, unroll=True)
+    return y * UM
+
+
+def balls_fixed(bearing, op, q, psi, spall, curve, iterations=3):
+    """Like ``jones.balls_at`` with a fixed number of Newton steps per ball.  A ball carried
+    by the cage over the spall gets the orbital speed of its undropped omega = 0 closed-form
+    position (``jones.balls_at`` solves the undropped ball exactly; the difference only enters
+    the F_c / M_g of a ball that has lost its inner contact)."""
+    from .defect import depth_profile
+    from .jones import _static_ball_position, ball_state, groove_centre_offsets
+
+    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    H_def = jnp.zeros_like(psi) if spall is None else depth_profile(bearing, spall, psi)
+
+    def one(a1, a2, h):
+        if spall is None:
+            wm0 = None
+        else:
+            x_u, _ = _static_ball_position(bearing, op, a1, a2, 0.0, curve)
+            wm0 = ball_state(bearing, op, x_u, a1, a2, 0.0, curve).omega_m
+        x = _solve_ball_fixed(bearing, op, a1, a2, h, curve, wm0, iterations)
+        return ball_state(bearing, op, x, a1, a2, h, curve, wm0)
+
+    return jax.vmap(one)(A1, A2, H_def)

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 
 #: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
 CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)}
-_COS_FLOOR = 0.05
+_DEN_FLOOR = 0.05
 
 
 def _f64(x):
@@ -70,14 +70,19 @@ def ball_kinematics(bearing, op: Operation, alpha_i, alpha_o) -> BallKinematics:
         beta = jnp.arctan2(jnp.sin(alpha_i), jnp.cos(alpha_i) - g)
     else:
         beta = jnp.arctan2(jnp.sin(alpha_o), jnp.cos(alpha_o) + g)
-    # cos(alpha - beta) -> 0 only for a ball far off a raceway (its geometric "contact angle"
-    # is then meaningless); the floor keeps omega_m finite there and is inactive (|alpha - beta|
-    # < 87 deg) for every ball in or near contact
-    k_i = (1.0 - g * jnp.cos(alpha_i)) / jnp.maximum(jnp.cos(alpha_i - beta), _COS_FLOOR)
-    k_o = (1.0 + g * jnp.cos(alpha_o)) / jnp.maximum(jnp.cos(alpha_o - beta), _COS_FLOOR)
+    # omega_m = omega k_i/(k_i+k_o), omega_R = omega k_i k_o/((k_i+k_o) g) with the denominators
+    # cos(alpha - beta) cleared: regular through alpha - beta = 90 deg.  The remaining
+    # denominator n_i c_o + n_o c_i vanishes only for a ball far off both raceways (a geometric
+    # "inner angle" near 180 deg); a floor there keeps the speeds finite and is never active
+    # for a ball in, or near, contact.
+    n_i = 1.0 - g * jnp.cos(alpha_i)
+    n_o = 1.0 + g * jnp.cos(alpha_o)
+    c_i = jnp.cos(alpha_i - beta)
+    c_o = jnp.cos(alpha_o - beta)
+    den = jnp.maximum(n_i * c_o + n_o * c_i, _DEN_FLOOR)
     w = op.speed
-    w_m = w * k_i / (k_i + k_o)
-    w_R = w * k_i * k_o / ((k_i + k_o) * g)
+    w_m = w * n_i * c_o / den
+    w_R = w * n_i * n_o / (den * g)
     Fc = op.centrifugal * 0.5 * bearing.ball_mass * bearing.pitch_diameter * w_m ** 2
     Mg = op.gyroscopic * bearing.ball_inertia * w_R * w_m * jnp.sin(beta)
     return BallKinematics(beta, w_m, w_R, Fc, Mg)

@@ -124,18 +124,10 @@ def test_crosscheck(name, geom, kw):
 
 
 # ---------------------------------------------------------------------------------------------
-# Known disagreements: bearingsim deviates from MODEL.md.  strict xfail, so that a fix (or a
-# deliberate change of MODEL.md, after which the reference must follow) is noticed.
+# Corner cases found by the reference (formerly disagreements, now both follow MODEL.md):
+# kinematics through alpha_i - beta = 90 deg (denominators cleared), and inner raceway control
+# with balls off their inner raceway (friction terms as MODEL.md writes them).
 # ---------------------------------------------------------------------------------------------
-_KIN_REASON = (
-    "bearingsim.ball_kinematics saturates omega_m and omega_R once alpha - beta nears 90 deg "
-    "(|cos(alpha_i - beta)| below ~0.05, outer control; likewise cos(alpha_o - beta) under inner "
-    "control), which MODEL.md section 4 does not have: there omega_m = omega n_i c_o/(n_i c_o + "
-    "n_o c_i) is regular through 90 deg.  E.g. outer control, alpha_o = 3 deg, alpha_i = 90 deg: "
-    "MODEL omega_m/omega = 0.9503, bearingsim 0.9444.")
-
-
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=_KIN_REASON)
 @pytest.mark.parametrize("control,alpha_i_deg", [("outer", 90.0), ("outer", 92.0),
                                                  ("inner", 86.0)])
 def test_kinematics_near_90deg_matches_model(control, alpha_i_deg):
@@ -149,35 +141,14 @@ def test_kinematics_near_90deg_matches_model(control, alpha_i_deg):
     np.testing.assert_allclose(np.asarray(kin.spin_speed), om_R, rtol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=_KIN_REASON + "  Full solve: balls 7-9 run at "
-                   "alpha_i - beta = 89.4..90.3 deg; bearingsim omega_m 1187 rad/s vs 1248-1277, "
-                   "F_c 3982 vs 4487 N; max diffs 0.25 deg, 0.37 % Q, 0.47 % q.")
 def test_crosscheck_alpha_i_near_90deg():
     _compare("218-Fr8000-Fa1500-12000rpm", H218,
              dict(loads=[8000, 0, 1500, 0, 0], speed_rpm=12000, cage_angle=0.03))
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "convention (b): under inner raceway control bearingsim keeps the friction terms "
-    "lambda_i M_g/D at inner contacts that carry no load (delta_i < 0, gaps up to 22 um), "
-    "~200 N of G per such ball here, ~1400 N of Fz in total.  With the gate as specified the "
-    "model has no solution for this case (a ball leaving inner contact needs a jump of 2 M_g/D "
-    "in its inner force; the reference finds none, and with a smoothed gate the balls settle at "
-    "delta_i -> 0+ with 74-81 % of the friction on), so the fix is a decision on the convention "
-    "(e.g. control passes to the outer race when the inner contact unloads), not a one-liner."))
-def test_inner_control_friction_only_at_loaded_contacts():
-    kw = dict(loads=[4000, 0, 6000, 0, 0], speed_rpm=12000, control="inner", cage_angle=0.03)
-    Fx, Fy, Fz, Mx, My = kw["loads"]
-    sol = bs.solve(_bearing(H218), bs.Operation.from_rpm(12000.0, control="inner"),
-                   bs.Loads(axial=Fz, radial_x=Fx), cage_angle=0.03, throw=False)
-    if int(sol.result) != 0:
-        return                      # not claiming a solution is acceptable
-    di = np.asarray(sol.delta_inner)
-    off = di <= 0.0
-    assert off.any()
-    scale = float(np.max(np.asarray(sol.Q_outer)))
-    assert np.abs(np.asarray(sol.ball_G)[off]).max() <= 1e-9 * scale
-    assert np.abs(np.asarray(sol.ball_H)[off]).max() <= 1e-9 * scale
+def test_crosscheck_inner_control_balls_off_inner_raceway():
+    _compare("218-inner-control-Fr4000-Fa6000-12000rpm", H218,
+             dict(loads=[4000, 0, 6000, 0, 0], speed_rpm=12000, control="inner", cage_angle=0.03))
 
 
 @pytest.mark.parametrize("Fa,alpha_deg,Q,dz_mm", [(22250.0, 41.72, 2089.6, 0.0415),
