@@ -4,6 +4,8 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results/demo
+# compiled JAX programs are reused across processes (tests, CLI runs, notebooks)
+export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.jax_cache
 
 .PHONY: demo test venv clean bench
 
@@ -19,10 +21,11 @@ demo: $(STAMP)
 	$(VENV)/bin/bearingsim demo --out $(OUT)
 
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider tests
+	$(PY) -m pytest -q -p no:cacheprovider tests $(wildcard notebooks/*.ipynb) --nbmake --durations=15
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_static.py
+	$(PY) benchmarks/bench_sweep.py
 
 clean:
 	rm -rf $(VENV) results build *.egg-info

@@ -133,6 +133,7 @@ class DynamicModel(eqx.Module):
     omega_c: jnp.ndarray        # cage speed (rad/s)
     contact_damping: jnp.ndarray  # (3,) c_b in x, y, axial (N s/m)
     params: DynamicsParameters
+    iterations: int = eqx.field(static=True, default=0)   # 0: exact balls_at; n: n Newton steps
 
     def resonator(self):
         p = self.params
@@ -142,11 +143,15 @@ class DynamicModel(eqx.Module):
     def azimuths(self, t):
         return self.bearing.ball_azimuths(self.theta0 + self.omega_c * t)
 
-    def balls(self, t, y):
-        """Ball states (BallState of (Z,)) and ring reactions R (5,) for the physical state y."""
+    def balls(self, t, y, exact=False):
+        """Ball states (BallState of (Z,)) and ring reactions R (5,) for the physical state y.
+        ``exact`` (or ``iterations == 0``): ``jones.balls_at``; else ``balls_fixed``."""
         q = jnp.concatenate([jnp.stack([y[0] - y[3], y[1] - y[4], y[2]]), self.tilts])
         psi = self.azimuths(t)
-        st, _ = balls_at(self.bearing, self.op, q, psi, self.spall, self.curve)
+        if exact or self.iterations == 0:
+            st, _ = balls_at(self.bearing, self.op, q, psi, self.spall, self.curve)
+        else:
+            st = balls_fixed(self.bearing, self.op, q, psi, self.spall, self.curve, self.iterations)
         return st, _reactions_from_balls(st, psi)
 
     def derivative(self, t, y, R):
@@ -174,14 +179,15 @@ def _vector_field(t, u, model: DynamicModel):
     return model.derivative(t, y, R) / _SCALE
 
 
-def build_model(bearing, op, loads, spall, sol, params: DynamicsParameters, theta0, curve):
+def build_model(bearing, op, loads, spall, sol, params: DynamicsParameters, theta0, curve,
+                iterations=0):
     """DynamicModel and initial physical state y0 from a quasi-static solution at theta0."""
     q = sol.displacement
     K = jnp.diagonal(sol.stiffness)[:3]
     cb = 2.0 * params.contact_damping_ratio * jnp.sqrt(jnp.maximum(K, 0.0) * params.shaft_mass)
     loads = jnp.asarray(loads, jnp.float64)
     model = DynamicModel(bearing, op, spall, curve, loads, q[3:5], jnp.asarray(theta0, jnp.float64),
-                         sol.cage_speed, cb, params)
+                         sol.cage_speed, cb, params, iterations)
     xh = loads[:2] / params.housing_stiffness
     y0 = jnp.concatenate([q[:2] + xh, q[2:3], xh, xh[:1], jnp.zeros(6)])
     return model, y0
@@ -278,7 +284,7 @@ _integrate_jit = eqx.filter_jit(_integrate)
 def _post(model, ts, ys):
     """Per sample: housing acceleration (2,), resonator acceleration, ball Q_i, Q_o, a_i, a_o."""
     def one(t, y):
-        st, R = model.balls(t, y)
+        st, R = model.balls(t, y, exact=True)
         dy = model.derivative(t, y, R)
         return dy[9:11], dy[11], st.Q_i, st.Q_o, st.alpha_i, st.alpha_o
 
@@ -539,3 +545,57 @@ def balls_fixed(bearing, op, q, psi, spall, curve, iterations=3):
         return ball_state(bearing, op, x, a1, a2, h, curve, wm0)
 
     return jax.vmap(one)(A1, A2, H_def)
+
+
+_MAX_ITER = 8
+_ITER_TOL = 1e-7     # relative (to the largest ball load) accuracy required of the lean solver
+
+
+def _lean_errors(bearing, op, q, spall, curve, angles, scales):
+    """Max relative ball-load error of the lean solver after 1.._MAX_ITER Newton steps, over
+    cage angles x displacement scalings (vs jones.balls_at)."""
+    from .jones import _static_ball_position, ball_state, groove_centre_offsets
+    from .defect import depth_profile
+
+    def at(th, s):
+        qq = q * s
+        psi = bearing.ball_azimuths(th)
+        ref, _ = balls_at(bearing, op, qq, psi, spall, curve)
+        A1, A2 = groove_centre_offsets(bearing, qq, psi)
+        H = jnp.zeros_like(psi) if spall is None else depth_profile(bearing, spall, psi)
+
+        def hist(a1, a2, h):
+            if spall is None:
+                wm0 = None
+            else:
+                xu, _ = _static_ball_position(bearing, op, a1, a2, 0.0, curve)
+                wm0 = ball_state(bearing, op, xu, a1, a2, 0.0, curve).omega_m
+            ys = jnp.stack([_solve_ball_fixed(bearing, op, a1, a2, h, curve, wm0, n)
+                            for n in range(1, _MAX_ITER + 1)])
+            return jax.vmap(lambda x: ball_state(bearing, op, x, a1, a2, h, curve, wm0))(ys)
+
+        st = jax.vmap(hist)(A1, A2, H)         # (Z, N) fields
+        scale = jnp.maximum(jnp.max(ref.Q_o), jnp.max(ref.Q_i)) + 1e-30
+        err = jnp.maximum(jnp.max(jnp.abs(st.Q_o - ref.Q_o[:, None]), axis=0),
+                          jnp.max(jnp.abs(st.Q_i - ref.Q_i[:, None]), axis=0))
+        return err / scale
+
+    errs = jax.vmap(lambda th: jax.vmap(lambda s: at(th, s))(scales))(angles)
+    return jnp.max(errs, axis=(0, 1))
+
+
+_lean_errors_jit = eqx.filter_jit(_lean_errors)
+
+
+def choose_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=_ITER_TOL):
+    """Smallest number of lean Newton steps whose ball loads match ``jones.balls_at`` to ``tol``
+    (relative to the largest load) over one ball pitch of cage angles (and with a ball over the
+    spall centre) at displacements q x (0.95, 1, 1.05); 0 (use balls_at) if none <= 8 does."""
+    Z = bearing.n_balls
+    angles = theta0 + np.linspace(0.0, 2 * np.pi / Z, 12, endpoint=False)
+    if spall is not None:
+        angles = np.concatenate([angles, [float(spall.center)]])
+    scales = jnp.array([0.95, 1.0, 1.05])
+    errs = np.asarray(_lean_errors_jit(bearing, op, q, spall, curve, jnp.asarray(angles), scales))
+    ok = np.flatnonzero(errs <= tol)
+    return int(ok[0]) + 1 if ok.size else 0

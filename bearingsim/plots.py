@@ -143,7 +143,7 @@ def plot_sweep(sweep_sol, title="", spall=None, path=None):
         col = C_IN if "inner" in name else C_OUT
         for i, (lab, ls, c) in enumerate(styles):
             ax.plot(u[ok], tr[name][ok, i] * f, ls, color=c or col, lw=1.5 if i == 1 else 1.1, label=lab)
-        ax.set_xlabel("position of the nearest ball relative to the spall centre (deg)")
+        ax.set_xlabel("ball position relative to the spall centre (deg)")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         if k == 0:
