@@ -360,9 +360,9 @@ SCHEMA: dict[str, Section] = {
             "noise_rms_m_s2": _num("white Gaussian noise added to the sensor acceleration (rms)",
                                    "m_s2", 0.0, ge=0),
             "seed": _int("seed of the noise generator", 0, ge=0),
-            "rtol": _num("relative tolerance of the adaptive time integration", "", 1e-6, gt=0, lt=1),
+            "rtol": _num("relative tolerance of the adaptive time integration", "", 1e-5, gt=0, lt=1),
             "atol": _num("absolute tolerance of the time integration, on displacements in um and "
-                         "velocities in mm/s", "", 1e-6, gt=0),
+                         "velocities in mm/s", "", 1e-5, gt=0),
         },
     ),
 }

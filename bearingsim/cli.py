@@ -284,6 +284,180 @@ def cmd_study(args):
     return 0
 
 
+# ------------------------------------------------------------------------------------ simulate
+def simulate_datasets(res, Z):
+    """The fixed /dynamics layout of ``bearingsim simulate`` (SI)."""
+    fr = res.frequencies
+    attrs = dict(fr)
+    attrs.update(
+        contact_angle_rad=float(res.contact_angle),
+        frequency_note=("ftf = quasi-static cage speed / 2 pi, bpfo = Z ftf; bpfi and bsf (once per "
+                        "ball revolution) from MODEL.md section 8 at the mean loaded contact angle "
+                        "contact_angle_rad"),
+        result=int(res.result), num_steps=int(res.num_steps), balls=int(Z),
+        ball_iterations=int(res.ball_iterations),
+        contact_damping_Ns_per_m=np.asarray(res.contact_damping))
+    return {
+        "time": (np.asarray(res.time), "s"),
+        "cage_angle": (np.asarray(res.cage_angle), "rad"),
+        "ring_displacement": (np.asarray(res.ring_displacement), "m (shaft relative to housing: x, y, axial)"),
+        "housing_displacement": (np.asarray(res.housing_displacement), "m (x, y)"),
+        "housing_acceleration": (np.asarray(res.housing_acceleration), "m/s^2 (x, y)"),
+        "sensor_acceleration": (np.asarray(res.sensor_acceleration), "m/s^2"),
+        "Q_inner": (np.asarray(res.Q_inner), "N"),
+        "Q_outer": (np.asarray(res.Q_outer), "N"),
+        "alpha_inner": (np.asarray(res.alpha_inner), "rad"),
+        "alpha_outer": (np.asarray(res.alpha_outer), "rad"),
+        "spall_edge_times": (np.asarray(res.jump_times, float), "s"),
+        "spall_pass_times": (np.asarray(res.pass_times, float), "s"),
+        "@attrs": attrs,
+    }
+
+
+def _band(fs, f_n):
+    from .signal import select_band
+
+    return select_band(np.zeros(16), fs, resonance_hz=min(f_n, 0.45 * fs))
+
+
+def plot_simulation(res, case, d, outdir):
+    import matplotlib.pyplot as plt
+
+    from .plots_signal import plot_envelope_spectrum, plot_time_history
+    from .signal import envelope_spectrum
+
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    t = np.asarray(res.time)
+    a = np.asarray(res.sensor_acceleration)
+    passes = np.asarray(res.pass_times)
+    written = []
+    p = outdir / "sensor_acceleration.png"
+    plt.close(plot_time_history(t, a, marks=passes, title=f"{case.title}: sensor acceleration", path=p))
+    written.append(p)
+    if passes.size:
+        bpfo = res.frequencies["bpfo_Hz"]
+        t0 = max(float(t[0]), float(passes[0]) - 0.5 / bpfo)
+        t1 = min(float(t[-1]), t0 + 3.0 / bpfo)
+        p = outdir / "sensor_acceleration_zoom.png"
+        plt.close(plot_time_history(t, a, marks=passes, zoom=(t0, t1),
+                                    title=f"{case.title}: sensor acceleration (3 spall passes)", path=p))
+        written.append(p)
+    Qo = np.asarray(res.Q_outer)
+    fig, ax = plt.subplots(figsize=(10, 4), constrained_layout=True)
+    H = np.asarray(res.Q_outer)
+    sp = case.spall()
+    if sp is not None:
+        from .defect import depth_profile
+        import jax.numpy as jnp
+        psi = np.asarray(res.cage_angle)[:, None] + 2 * np.pi * np.arange(Qo.shape[1]) / Qo.shape[1]
+        inside = np.asarray(depth_profile(case.bearing(), sp, jnp.asarray(psi))) > 0
+        balls = np.flatnonzero(inside.any(axis=0))
+    else:
+        balls = np.argsort(-Qo.max(axis=0))[:3]
+    for j in (balls if balls.size else range(Qo.shape[1])):
+        ax.plot(t * 1e3, H[:, j], lw=0.8, label=f"ball {j}")
+    for tm in passes[:30]:
+        ax.axvline(tm * 1e3, color="#d62728", ls=":", lw=0.8)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("outer contact load Q_o (N)")
+    ax.set_title(f"{case.title}: outer loads of the balls that pass the spall")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=4)
+    p = outdir / "ball_loads.png"
+    fig.savefig(p, dpi=120)
+    plt.close(fig)
+    written.append(p)
+    fs = float(d["sample_rate"])
+    if t.size > 64:
+        band = _band(fs, d["resonance_frequency"])
+        es = envelope_spectrum(a, fs, band=band)
+        fr = res.frequencies
+        p = outdir / "envelope_spectrum.png"
+        plt.close(plot_envelope_spectrum(es, {"BPFO": fr["bpfo_Hz"], "FTF": fr["ftf_Hz"],
+                                              "shaft": fr["shaft_Hz"]},
+                                         title=f"{case.title}: squared-envelope spectrum", path=p,
+                                         fmax=5.5 * fr["bpfo_Hz"]))
+        written.append(p)
+    return written
+
+
+def cmd_simulate(args):
+    from . import io
+    from .dynamics import RESULT_MESSAGES, simulate_case
+
+    case = _load(args.case)
+    d = case.dynamics_settings()
+    res = simulate_case(case, throw=False)
+    if res.result != 0:
+        raise CLIError(f"{args.case}: the dynamic simulation failed: {RESULT_MESSAGES[res.result]} "
+                       f"after {res.num_steps} steps. Hint: loosen [dynamics] rtol/atol or check the "
+                       "structural parameters.", EXIT_SOLVE)
+    Z = case.bearing().n_balls
+    io.write_h5(args.output, {"dynamics": simulate_datasets(res, Z)},
+                attrs={"case_toml": case.text, "title": case.title})
+    fr = res.frequencies
+    a = np.asarray(res.sensor_acceleration)
+    print(f"{case.title}: {float(res.time[-1]):.4f} s simulated in {res.num_steps} steps "
+          f"({res.ball_iterations or 'exact'} ball Newton steps), sensor rms {a.std():.4g} m/s^2, "
+          f"{len(res.pass_times)} spall passes")
+    print("  ".join(f"{k[:-3]} {v:.4f} Hz" for k, v in fr.items()))
+    print(f"wrote {args.output}")
+    if args.plot:
+        for p in plot_simulation(res, case, d, args.plot):
+            print(f"wrote {p}")
+    return 0
+
+
+def cmd_spectrum(args):
+    import h5py
+
+    from .case import parse_case
+    from .signal import envelope_spectrum, harmonic_peaks, peak_frequency
+
+    try:
+        with h5py.File(args.input, "r") as f:
+            g = f["dynamics"]
+            t = g["time"][()]
+            a = g["sensor_acceleration"][()]
+            fr = {k: float(g.attrs[k]) for k in ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
+            toml = f.attrs.get("case_toml", "")
+    except (OSError, KeyError) as e:
+        raise CLIError(f"{args.input}: not a bearingsim simulate output ({e})")
+    fs = 1.0 / float(t[1] - t[0])
+    f_n = 3000.0
+    if toml:
+        try:
+            f_n = parse_case(toml).dynamics_settings()["resonance_frequency"]
+        except Exception:
+            pass
+    band = _band(fs, f_n)
+    es = envelope_spectrum(a, fs, band=band)
+    bpfo = fr["bpfo_Hz"]
+    try:
+        fp = peak_frequency(es, bpfo, rel_window=0.05)
+    except ValueError as e:
+        raise CLIError(f"{args.input}: no envelope peak near BPFO {bpfo:.3f} Hz: {e}", EXIT_SOLVE)
+    print(f"{args.input}: {t.size} samples at {fs:.0f} Hz ({t[-1] - t[0] + 1 / fs:.4f} s), "
+          f"band {band[0]:.0f}-{band[1]:.0f} Hz, resolution {es.resolution:.3f} Hz")
+    print(f"envelope peak near BPFO: {fp:.4f} Hz; reported bpfo_Hz {bpfo:.4f} Hz; "
+          f"relative difference {(fp - bpfo) / bpfo * 100:+.4f} %")
+    rows = [(k, k * bpfo, fk, ak, (fk - k * bpfo) / (k * bpfo) * 100)
+            for k, fk, ak in harmonic_peaks(es, bpfo, n=5, rel_window=0.03)]
+    print(_fmt_table(("k", "k x bpfo Hz", "measured Hz", "amplitude (m/s^2)^2", "diff %"), rows,
+                     ("{}", "{:.3f}", "{:.3f}", "{:.4g}", "{:+.4f}")))
+    if args.plot:
+        from .plots_signal import plot_envelope_spectrum
+        import matplotlib.pyplot as plt
+
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        plt.close(plot_envelope_spectrum(es, {"BPFO": bpfo, "FTF": fr["ftf_Hz"], "shaft": fr["shaft_Hz"]},
+                                         title=f"{args.input}: squared-envelope spectrum",
+                                         fmax=5.5 * bpfo, path=args.plot))
+        print(f"wrote {args.plot}")
+    return 0
+
+
 # ------------------------------------------------------------------------------------ demo
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "demo.toml"
 
@@ -328,6 +502,16 @@ def build_parser():
     s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
     s.add_argument("--plot", metavar="DIR", help="write plots into DIR")
     s.set_defaults(func=cmd_study)
+    s = sub.add_parser("simulate", help="dynamic simulation (shaft, housing, sensor resonator) "
+                       "with the Jones bearing forces; HDF5 output")
+    s.add_argument("case")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
+    s.add_argument("--plot", metavar="DIR", help="write plots into DIR")
+    s.set_defaults(func=cmd_simulate)
+    s = sub.add_parser("spectrum", help="envelope spectrum of a simulate output: peak near BPFO, harmonics")
+    s.add_argument("input", metavar="OUT.h5")
+    s.add_argument("--plot", metavar="PNG", help="write the envelope spectrum plot")
+    s.set_defaults(func=cmd_spectrum)
     s = sub.add_parser("demo", help="run the default case end to end and write all results and plots")
     s.add_argument("--case", default=None, help="case file (default: the Harris 218 demo case)")
     s.add_argument("--out", default="results/demo", help="output folder (default results/demo)")

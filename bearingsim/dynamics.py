@@ -329,6 +329,7 @@ class DynamicsResult(NamedTuple):
     pass_times: np.ndarray              # times a ball centre passes the spall centre (s)
     quasi_static: object                # JonesSolution at theta_c0
     contact_damping: jnp.ndarray        # (3,) N s/m
+    ball_iterations: int                # Newton steps per ball in the RHS (0: balls_at)
 
 
 def _time_grid(duration, sample_rate):
@@ -350,13 +351,14 @@ def _dtmax(bearing, spall, omega_c, params):
 def simulate(bearing, op: Operation, loads, spall: Spall | None = None,
              params: DynamicsParameters | None = None, duration=0.1, sample_rate=48000.0,
              theta0=0.0, rtol=1e-6, atol=1e-6, noise_rms=0.0, seed=0, hertz_method="exact",
-             progress=None, throw=True, max_steps=None) -> DynamicsResult:
+             progress=None, throw=True, max_steps=None, ball_iterations="auto") -> DynamicsResult:
     """Time simulation of MODEL.md section 7 (see the module docstring for the equations).
 
     ``loads`` [Fx, Fy, Fz, Mx, My] (N, N m), ``duration`` (s), ``sample_rate`` (Hz), ``theta0``
     the cage angle at t = 0 (rad).  ``rtol``/``atol`` of the step-size controller (atol on
     displacements in um and velocities in mm/s).  ``progress``: diffrax tqdm bar (default: when
-    duration >= 0.2 s).  Raises :class:`DynamicsError` when the integration fails and
+    duration >= 0.2 s).  ``ball_iterations``: Newton steps per ball in the right-hand side
+    ("auto": :func:`choose_iterations`; 0: the exact ``jones.balls_at``).  Raises :class:`DynamicsError` when the integration fails and
     ``throw`` (else check ``result.result``).
     """
     params = DynamicsParameters() if params is None else params
@@ -364,7 +366,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | None = None,
     curve = stiffness_curve(bearing, hertz_method)
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=spall, hertz_method=hertz_method,
                 throw=throw)
-    model, y0 = build_model(bearing, op, loads, spall, sol, params, theta0, curve)
+    if ball_iterations == "auto":
+        ball_iterations = choose_iterations(bearing, op, sol.displacement, spall, curve, theta0)
+    model, y0 = build_model(bearing, op, loads, spall, sol, params, theta0, curve,
+                            int(ball_iterations))
     omega_c = float(model.omega_c)
     ts = _time_grid(duration, sample_rate)
     t1 = float(ts[-1])
@@ -394,7 +399,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | None = None,
         alpha_inner=ai, alpha_outer=ao, result=code, num_steps=int(nsteps), frequencies=freqs,
         contact_angle=a_m, jump_times=jumps,
         pass_times=spall_pass_times(bearing, spall, theta0, omega_c, t1),
-        quasi_static=sol, contact_damping=model.contact_damping)
+        quasi_static=sol, contact_damping=model.contact_damping, ball_iterations=int(ball_iterations))
 
 
 def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
@@ -492,10 +497,9 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
 
 
 # ------------------------------------------------------------------------- lean ball solver
-def _solve_ball_fixed(bearing, op, A1, A2, H_def, curve, wm_undropped, iterations):
-    """Ball-centre position by ``iterations`` damped Newton steps from the omega = 0 closed
-    form (the Newton step of ``jones.solve_ball``, without its while loop / implicit
-    differentiation): cheap enough for the right-hand side of the time integration."""
+def _newton_setup(bearing, op, A1, A2, H_def, curve, wm_undropped):
+    """(start in um, Newton step) of the ball problem: the damped Newton step of
+    ``jones.solve_ball`` (step cap, never leave the outer raceway at speed)."""
     from .jones import UM, KN, _static_ball_position, ball_state
 
     D = bearing.ball_diameter
@@ -506,7 +510,7 @@ def _solve_ball_fixed(bearing, op, A1, A2, H_def, curve, wm_undropped, iteration
         st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
         return jnp.stack([st.r_axial, st.r_radial]) / KN
 
-    def body(_, y):
+    def step(y):
         J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
         mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
         dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
@@ -520,8 +524,25 @@ def _solve_ball_fixed(bearing, op, A1, A2, H_def, curve, wm_undropped, iteration
         target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
         return jnp.where(lift, y_new * target, y_new)
 
-    y = jax.lax.fori_loop(0, iterations, body, x0 / UM, unroll=True)
+    return x0 / UM, step
+
+
+def _solve_ball_fixed(bearing, op, A1, A2, H_def, curve, wm_undropped, iterations):
+    """Ball-centre position (m) after ``iterations`` damped Newton steps from the omega = 0
+    closed form (the Newton step of ``jones.solve_ball`` without its while loop and implicit
+    differentiation): cheap enough for the right-hand side of the time integration."""
+    from .jones import UM
+
+    y0, step = _newton_setup(bearing, op, A1, A2, H_def, curve, wm_undropped)
+    y = jax.lax.fori_loop(0, iterations, lambda _, y: step(y), y0, unroll=True)
     return y * UM
+
+
+def _undropped_speed(bearing, op, a1, a2, curve):
+    from .jones import _static_ball_position, ball_state
+
+    xu, _ = _static_ball_position(bearing, op, a1, a2, 0.0, curve)
+    return ball_state(bearing, op, xu, a1, a2, 0.0, curve).omega_m
 
 
 def balls_fixed(bearing, op, q, psi, spall, curve, iterations=3):
@@ -536,11 +557,7 @@ def balls_fixed(bearing, op, q, psi, spall, curve, iterations=3):
     H_def = jnp.zeros_like(psi) if spall is None else depth_profile(bearing, spall, psi)
 
     def one(a1, a2, h):
-        if spall is None:
-            wm0 = None
-        else:
-            x_u, _ = _static_ball_position(bearing, op, a1, a2, 0.0, curve)
-            wm0 = ball_state(bearing, op, x_u, a1, a2, 0.0, curve).omega_m
+        wm0 = None if spall is None else _undropped_speed(bearing, op, a1, a2, curve)
         x = _solve_ball_fixed(bearing, op, a1, a2, h, curve, wm0, iterations)
         return ball_state(bearing, op, x, a1, a2, h, curve, wm0)
 
@@ -565,14 +582,12 @@ def _lean_errors(bearing, op, q, spall, curve, angles, scales):
         H = jnp.zeros_like(psi) if spall is None else depth_profile(bearing, spall, psi)
 
         def hist(a1, a2, h):
-            if spall is None:
-                wm0 = None
-            else:
-                xu, _ = _static_ball_position(bearing, op, a1, a2, 0.0, curve)
-                wm0 = ball_state(bearing, op, xu, a1, a2, 0.0, curve).omega_m
-            ys = jnp.stack([_solve_ball_fixed(bearing, op, a1, a2, h, curve, wm0, n)
-                            for n in range(1, _MAX_ITER + 1)])
-            return jax.vmap(lambda x: ball_state(bearing, op, x, a1, a2, h, curve, wm0))(ys)
+            from .jones import UM
+            wm0 = None if spall is None else _undropped_speed(bearing, op, a1, a2, curve)
+            y0, step = _newton_setup(bearing, op, a1, a2, h, curve, wm0)
+            _, ys = jax.lax.scan(lambda y, _: (lambda yn: (yn, yn))(step(y)), y0, None,
+                                 length=_MAX_ITER)
+            return jax.vmap(lambda x: ball_state(bearing, op, x * UM, a1, a2, h, curve, wm0))(ys)
 
         st = jax.vmap(hist)(A1, A2, H)         # (Z, N) fields
         scale = jnp.maximum(jnp.max(ref.Q_o), jnp.max(ref.Q_i)) + 1e-30

@@ -154,14 +154,21 @@ def _static_ball_position(bearing, op, A1, A2, H_def, curve):
 _BALL_MAXIT = 40
 
 
-def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None):
+def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None, x_init=None):
     """Ball-centre position (m) in equilibrium for groove-centre offsets (A1, A2) and spall depth.
 
-    Differentiable (implicit function theorem via ``lax.custom_root``).
+    Starts from the omega = 0 closed form, or from ``x_init`` (m; a nearby solution, e.g. the
+    previous Newton iterate) where that keeps the ball on its outer raceway.  Differentiable
+    (implicit function theorem via ``lax.custom_root``; the start does not enter derivatives).
     """
     D = bearing.ball_diameter
     cap = 2e-3 * D / UM          # step cap (um): ~ a contact deflection
     x0, d_c = _static_ball_position(bearing, op, A1, A2, H_def, curve)
+    if x_init is not None:
+        Lo = jnp.sqrt(x_init[0] ** 2 + x_init[1] ** 2)
+        usable = jnp.all(jnp.isfinite(x_init)) & (Lo > 0.0) & (
+            (d_c <= 0.0) | (Lo - (bearing.f_outer - 0.5) * D - H_def > 0.0))
+        x0 = jnp.where(usable, lax.stop_gradient(x_init), x0)
 
     def f(y):
         st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
@@ -204,7 +211,7 @@ def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None):
     return y * UM
 
 
-def balls_at(bearing, op, q, psi, spall: Spall | None, curve):
+def balls_at(bearing, op, q, psi, spall: Spall | None, curve, x_init=None):
     """Per-ball equilibrium states (a BallState of (Z,) arrays) for ring displacement q."""
     A1, A2 = groove_centre_offsets(bearing, q, psi)
     if spall is None:
@@ -212,22 +219,28 @@ def balls_at(bearing, op, q, psi, spall: Spall | None, curve):
     else:
         H_def = depth_profile(bearing, spall, psi)
 
-    def one(a1, a2, h):
+    def one(a1, a2, h, xi):
         if spall is None:
-            x = solve_ball(bearing, op, a1, a2, h, curve)
+            x = solve_ball(bearing, op, a1, a2, h, curve, None, xi)
             return ball_state(bearing, op, x, a1, a2, h, curve)
 
         # two passes through one traced ball solve: first without the spall (the undropped
         # position gives the orbital speed of a ball the cage carries), then with it
         def passage(wm0, hh):
-            x = solve_ball(bearing, op, a1, a2, hh, curve, wm0)
+            start = xi
+            if xi is not None:   # the warm start is the dropped position: lift it by h - hh
+                Lo = jnp.sqrt(xi[0] ** 2 + xi[1] ** 2)
+                start = xi * (Lo - (h - hh)) / jnp.where(Lo > 0.0, Lo, 1.0)
+            x = solve_ball(bearing, op, a1, a2, hh, curve, wm0, start)
             st = ball_state(bearing, op, x, a1, a2, hh, curve, wm0)
             return st.omega_m, st
 
         _, sts = lax.scan(passage, jnp.zeros_like(a1), jnp.stack([jnp.zeros_like(h), h]))
         return jax.tree_util.tree_map(lambda a: a[1], sts)
 
-    return jax.vmap(one)(A1, A2, H_def), H_def
+    if x_init is None:
+        return jax.vmap(lambda a1, a2, h: one(a1, a2, h, None))(A1, A2, H_def), H_def
+    return jax.vmap(one)(A1, A2, H_def, x_init), H_def
 
 
 def _reactions_from_balls(st: BallState, psi):
@@ -277,11 +290,12 @@ def _initial_displacement(bearing, loads, hertz_method):
 _LS_STEPS = 12
 
 
-def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol):
+def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol, x_init_shape, ball_positions):
     """Damped Newton on R(q) = F in scaled variables.
 
-    ``RJ(q) -> (J, (R, aux))`` evaluates the load-displacement map, its Jacobian and the ball
-    states in one pass.  A single loop does both Newton steps and backtracking: each pass
+    ``RJ(q, x_init) -> (J, (R, aux))`` evaluates the load-displacement map, its Jacobian and
+    the ball states in one pass (ball solves warm-started from ``x_init``, the accepted iterate's
+    ball positions ``ball_positions(aux)``; NaN = use the closed-form start).  A single loop does both Newton steps and backtracking: each pass
     evaluates one trial point; an accepted trial brings the Jacobian for the next step (one
     trace of the model, so compile time stays small).
     Returns (q, J, aux, result, iterations, residual max-norm in N).
@@ -290,8 +304,8 @@ def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol):
     tol = atol / KN + rtol * jnp.max(jnp.abs(Fn))
     cap = 200.0   # um (or um at R_i) per Newton step
 
-    def evaluate(z):
-        J, (R, aux) = RJ(z * qs)
+    def evaluate(z, x_init):
+        J, (R, aux) = RJ(z * qs, x_init)
         return R / rs - Fn, J * (qs[None, :] / rs[:, None]), J, aux
 
     def direction(Js, r):
@@ -305,10 +319,10 @@ def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol):
 
     def body(c):
         zt = c["z"] + c["t"] * c["dz"]
-        rt, Jst, Jt, auxt = evaluate(zt)
+        first = c["it"] < 0
+        rt, Jst, Jt, auxt = evaluate(zt, jnp.where(first, jnp.nan, ball_positions(c["aux"])))
         rn = jnp.max(jnp.abs(rt))
         r0 = jnp.max(jnp.abs(c["r"]))
-        first = c["it"] < 0
         finite = jnp.isfinite(rn) & jnp.all(jnp.isfinite(Jst))
         ok = first | (finite & (rn <= (1.0 - 1e-4 * c["t"]) * r0))
         sel = lambda new, old: jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, old)
@@ -329,7 +343,8 @@ def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol):
 
     z0 = q0 / qs
     # shapes of the evaluation's outputs, without tracing the model a second time
-    shapes = jax.eval_shape(evaluate, z0)
+    x_shape = jax.ShapeDtypeStruct(x_init_shape, jnp.float64)
+    shapes = jax.eval_shape(evaluate, z0, x_shape)
     zeros = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
     init = dict(z=z0, r=zeros[0], Js=zeros[1], J=zeros[2], aux=zeros[3], dz=jnp.zeros(5),
                 t=jnp.float64(0.0), it=jnp.int32(-1), ls=jnp.int32(0), code=jnp.int32(-1))
@@ -410,13 +425,15 @@ def _solve(bearing, op, loads, cage_angle, spall, q0, speed_steps, maxit, rtol, 
     def stage(q, frac):
         o = eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
 
-        def R_aux(qq):
-            st, H_def = balls_at(bearing, o, qq, psi, spall, curve)
+        def R_aux(qq, x_init):
+            st, H_def = balls_at(bearing, o, qq, psi, spall, curve, x_init)
             R = _reactions_from_balls(st, psi)
             return R, (R, (st, H_def))
 
         RJ = jax.jacfwd(R_aux, has_aux=True)
-        q, J, aux, code, it, res = _ring_newton(RJ, q, F, qs, rs, maxit, rtol, atol)
+        q, J, aux, code, it, res = _ring_newton(
+            RJ, q, F, qs, rs, maxit, rtol, atol, (bearing.n_balls, 2),
+            lambda aux: jnp.stack([aux[0].X1, aux[0].X2], axis=-1))
         return q, (J, aux, code, it, res)
 
     # later stages start from the last iterate of the one before; the final stage decides
