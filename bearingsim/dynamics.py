@@ -438,9 +438,9 @@ _qs_batch_jit = eqx.filter_jit(_qs_batch)
 
 
 def _batch_integrate(bearing, op, loads, spall, sols, params, theta0, curve, ts, jump_ts, dtmax,
-                     rtol, atol, max_steps, noise_key, noise_rms):
+                     rtol, atol, max_steps, noise_key, noise_rms, iterations):
     def one(o, F, sp, s, p, th, jt, key):
-        model, y0 = build_model(bearing, o, F, sp, s, p, th, curve)
+        model, y0 = build_model(bearing, o, F, sp, s, p, th, curve, iterations)
         ys, code, n = _integrate(model, y0, ts, jt, dtmax, rtol, atol, max_steps, False)
         y = ys * 1.0
         k_r, c_r = model.resonator()
@@ -459,13 +459,16 @@ _batch_integrate_jit = eqx.filter_jit(_batch_integrate)
 def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_depth,
                    profile="rectangular", params: DynamicsParameters | None = None, duration=0.1,
                    sample_rate=48000.0, theta0=0.0, rtol=1e-6, atol=1e-6, noise_rms=0.0, seed=0,
-                   control="outer", hertz_method="exact", max_steps=None) -> DynamicsBatchResult:
+                   control="outer", hertz_method="exact", max_steps=None,
+                   ball_iterations="auto") -> DynamicsBatchResult:
     """N simulations at once (vmap), same bearing (Z), spall profile, duration and sample rate.
 
     ``speed_rpm`` (N,), ``loads`` (N, 5), ``spall_center``/``spall_extent`` (rad),
     ``spall_depth`` (m) (N,) each; ``params`` fields may be scalars or (N,).  Never raises:
     ``result`` is per item (0 = successful; see RESULT_MESSAGES).  Only the sensor signal and
-    the ring displacement are kept (memory).
+    the ring displacement are kept (memory).  ``ball_iterations="auto"`` checks the lean ball
+    solver (:func:`choose_iterations`) on the fastest item and the most heavily loaded one and
+    adds one Newton step of margin.
     """
     loads = jnp.asarray(loads, jnp.float64)
     n = loads.shape[0]
@@ -477,6 +480,15 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     th = bc(theta0)
     sols = _qs_batch_jit(bearing, op, loads, th, spall, hertz_method)
     omega_c = np.asarray(sols.cage_speed)
+    curve = stiffness_curve(bearing, hertz_method)
+    if ball_iterations == "auto":
+        its = []
+        for i in {int(np.argmax(np.asarray(op.speed))), int(np.argmax(np.abs(np.asarray(loads)).sum(1)))}:
+            pick = lambda a: a[i]
+            sp_i = Spall(float(spall.center[i]), float(spall.extent[i]), float(spall.depth[i]), profile)
+            its.append(choose_iterations(bearing, jax.tree_util.tree_map(pick, op),
+                                         sols.displacement[i], sp_i, curve, float(th[i])))
+        ball_iterations = 0 if 0 in its else min(max(its) + 1, _MAX_ITER)
     ts = _time_grid(duration, sample_rate)
     t1 = float(ts[-1])
     jumps = [spall_edge_times(bearing, Spall(float(spall.center[i]), float(spall.extent[i]),
@@ -490,9 +502,9 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     dtmax = _dtmax(bearing, spall, omega_ok, params)
     keys = jax.random.split(jax.random.PRNGKey(int(seed)), n)
     a_r, rel, code, nsteps, wc = _batch_integrate_jit(
-        bearing, op, loads, spall, sols, params, th, stiffness_curve(bearing, hertz_method),
+        bearing, op, loads, spall, sols, params, th, curve,
         jnp.asarray(ts), jump_ts, dtmax, jnp.float64(rtol), jnp.float64(atol), max_steps, keys,
-        jnp.float64(noise_rms))
+        jnp.float64(noise_rms), int(ball_iterations))
     return DynamicsBatchResult(ts, a_r, rel, code, nsteps, wc, bearing.n_balls * wc / (2 * np.pi))
 
 
