@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|demo``.
 
 Engineering units with the unit in every name; SI inside.  Exit codes: 0 success, 2 bad input,
 3 a solve did not converge, 4 an output could not be written.
@@ -472,11 +472,16 @@ def cmd_demo(args):
     t0 = time.time()
     print(f"bearingsim demo: {case_path}\n")
     print(info_text(case), "\n")
-    print("[1/2] quasi-static solve (compiles once, ~10 s)")
+    print("[1/4] quasi-static solve (compiles once, ~10 s)")
     cmd_static(argparse.Namespace(case=str(case_path), json=str(out / "static.json"),
                                   plot=str(out / "static.png")))
-    print("\n[2/2] cage-angle sweep past the spall")
+    print("\n[2/4] cage-angle sweep past the spall")
     cmd_sweep(argparse.Namespace(case=str(case_path), output=str(out / "sweep.h5"), plot=str(out)))
+    if case.data.get("dynamics") is not None and case.spall() is not None:
+        print("\n[3/4] dynamic simulation past the spall")
+        cmd_simulate(argparse.Namespace(case=str(case_path), output=str(out / "simulate.h5"), plot=str(out)))
+        print("\n[4/4] squared-envelope spectrum")
+        cmd_spectrum(argparse.Namespace(input=str(out / "simulate.h5"), plot=str(out / "envelope_spectrum.png")))
     print(f"\ndone in {time.time() - t0:.0f} s; all results and plots are in {out.resolve()}")
     return 0
 
