@@ -110,6 +110,7 @@ _TYPE_NAMES = {
     "str": "a string",
     "enum": "a string",
     "numbers": "a non-empty array of numbers",
+    "range": "a two-element array [min, max] of numbers",
 }
 
 
@@ -118,7 +119,8 @@ class Key:
     """Spec of one case key.
 
     ``type``: "float" (int accepted), "int", "bool", "str", "enum" (a string from ``choices``)
-    or "numbers" (non-empty array, elements checked elsewhere).
+    "numbers" (non-empty array, elements checked elsewhere) or "range" (``[min, max]``: two finite
+    numbers, min <= max, each within gt/ge/lt/le; min = max fixes the value).
     ``default``: a value, :data:`REQUIRED`, :data:`OPTIONAL`, or a callable ``f(section_data,
     data)`` evaluated on the normalised data once the other keys are known (``default_doc``
     then describes it).  ``gt/ge/lt/le``: allowed range (exclusive / inclusive bounds).
@@ -169,6 +171,8 @@ class Key:
             return rng if rng else "a finite number"
         if self.type == "enum":
             return "one of " + ", ".join(json.dumps(c) for c in self.choices)
+        if self.type == "range":
+            return "[min, max] with min <= max" + (f", each {rng}" if rng else "")
         return _TYPE_NAMES[self.type]
 
 
@@ -208,6 +212,18 @@ def _str(doc, default=REQUIRED):
 
 def _enum(doc, choices, default=REQUIRED):
     return Key("enum", doc, "", default, choices=tuple(choices))
+
+
+def _range(doc, unit="", default=REQUIRED, default_doc=None, **rng):
+    return Key("range", doc, unit, default, default_doc=default_doc, **rng)
+
+
+def _fixed_from(section, key):
+    """Default of a [dataset] range: the case's own value, fixed ([v, v]); None if absent."""
+    def default(sec, data):
+        v = data.get(section, {}).get(key)
+        return None if v is None else [float(v), float(v)]
+    return default
 
 
 def _default_sweep_stop(sec, data):
@@ -365,6 +381,44 @@ SCHEMA: dict[str, Section] = {
                          "velocities in mm/s", "", 1e-5, gt=0),
         },
     ),
+    "dataset": Section(
+        "Labelled data set of simulated sensor signals (``bearingsim dataset``): ``count`` items, "
+        "each a [dynamics] simulation of ``duration_s`` with its speed, loads and spall drawn "
+        "uniformly from the [min, max] ranges below (min = max fixes a value); the first "
+        "round(healthy_fraction x count) items are healthy (no spall).  The other [dynamics] "
+        "keys (sample rate, structure, tolerances, noise) apply to every item.",
+        {
+            "count": _int("number of items N", ge=1),
+            "seed": _int("seed of the label draw (numpy default_rng) and of the noise", 0, ge=0),
+            "duration_s": _num("simulated time per item", "s", 0.1, gt=0),
+            "chunk": _int("items simulated together (vmap); memory and speed trade-off", 16, ge=1),
+            "healthy_fraction": _num("fraction of healthy items (spall depth and length 0)", "",
+                                     0.2, ge=0, le=1),
+            "speed_rpm": _range("inner-ring speed range", "rpm", _fixed_from("operation", "speed_rpm"),
+                                "[operation.speed_rpm, operation.speed_rpm]", gt=0),
+            "radial_N": _range("radial load range, along +x (the load zone is centred at azimuth 0)",
+                               "N", _fixed_from("load", "radial_x_N"),
+                               "[load.radial_x_N, load.radial_x_N]", ge=0),
+            "axial_N": _range("axial load range", "N", _fixed_from("load", "axial_N"),
+                              "[load.axial_N, load.axial_N]", ge=0),
+            "spall_length_mm": _range("spall arc length range along the outer raceway", "mm",
+                                      _fixed_from("defect", "length_mm"),
+                                      "[defect.length_mm, defect.length_mm]", gt=0),
+            "spall_depth_mm": _range("spall depth range", "mm", _fixed_from("defect", "depth_mm"),
+                                     "[defect.depth_mm, defect.depth_mm]", ge=0),
+            "spall_center_deg": _range("spall centre azimuth range (0: centre of the load zone)",
+                                       "deg", _fixed_from("defect", "center_deg"),
+                                       "[defect.center_deg, defect.center_deg]", ge=-360, le=360),
+        },
+        fill_defaults=False,
+        notes=(
+            "spall_length_mm and spall_depth_mm must be given when the case has no [defect] "
+            "(with length_mm) to take them from",
+            "spall_depth_mm max < bearing.ball_diameter_mm; spall_length_mm max shorter than the "
+            "ball pitch along the outer raceway",
+            "radial_N and axial_N may not both allow 0 (an unloaded bearing has no solution)",
+        ),
+    ),
 }
 
 
@@ -487,6 +541,23 @@ def _check_value(name: str, spec: Key, v):
             hint = f" (did you mean {json.dumps(close[0])}?)" if close else ""
             return False, None, f"{shown} is not allowed: must be {spec.requirement_text()}{hint}"
         return True, v, None
+    if t == "range":
+        if not isinstance(v, list):
+            return False, None, f"{shown} has the wrong type: expected {_TYPE_NAMES[t]}, got {_kind(v)}"
+        if len(v) != 2:
+            return False, None, f"{shown} must have exactly two elements [min, max], got {len(v)}"
+        xs = []
+        for e in v:
+            if isinstance(e, bool) or not isinstance(e, (int, float)) or not math.isfinite(e):
+                return False, None, f"{shown} must hold two finite numbers [min, max], got {_fmt_value(e)}"
+            x = float(e)
+            if ((spec.gt is not None and not x > spec.gt) or (spec.ge is not None and not x >= spec.ge)
+                    or (spec.lt is not None and not x < spec.lt) or (spec.le is not None and not x <= spec.le)):
+                return False, None, f"{shown} is out of range: must be {spec.requirement_text()}"
+            xs.append(x)
+        if xs[0] > xs[1]:
+            return False, None, f"{shown} has min > max: must be {spec.requirement_text()}"
+        return True, xs, None
     if t == "numbers":
         if not isinstance(v, list):
             return False, None, f"{shown} has the wrong type: expected {_TYPE_NAMES[t]}, got {_kind(v)}"
@@ -676,10 +747,39 @@ def _cross_checks(data: dict, problems: list[str], raw: dict | None = None) -> N
                         f"raceway (R_o = {_fmt_num(R_o)} mm; the spall spans {_fmt_num(extent)} deg): "
                         f"only one ball at a time may be over the spall")
 
+    _dataset_checks(data, problems, geometry_ok, raw)
+
     s = data.get("sweep")
     if s is not None and has(s, "start_deg", "stop_deg") and s["start_deg"] == s["stop_deg"]:
         problems.append(f"sweep.stop_deg = {shown('sweep', 'stop_deg')} must differ from "
                         f"sweep.start_deg = {shown('sweep', 'start_deg')}")
+
+
+def _dataset_checks(data: dict, problems: list[str], geometry_ok: bool, raw: dict | None) -> None:
+    ds = data.get("dataset")
+    if ds is None:
+        return
+    b = data.get("bearing", {})
+    for key in ("spall_length_mm", "spall_depth_mm"):
+        if key not in ds and data.get("defect", {}).get(key[len("spall_"):]) is None:
+            if key not in (_section_raw(raw or {}, "dataset") or {}):  # else invalid, reported
+                problems.append(f"missing key dataset.{key}: must be {SCHEMA['dataset'].keys[key].requirement_text()} "
+                                f"(the case has no [defect] {key[len('spall_'):]} to take it from)")
+    if "spall_depth_mm" in ds and "ball_diameter_mm" in b and not ds["spall_depth_mm"][1] < b["ball_diameter_mm"]:
+        problems.append(f"dataset.spall_depth_mm = {_fmt_value(ds['spall_depth_mm'])}: the largest depth must be "
+                        f"less than bearing.ball_diameter_mm = {_fmt_num(b['ball_diameter_mm'])}")
+    alpha0 = _free_contact_angle_deg(b)
+    if "spall_length_mm" in ds and geometry_ok and "balls" in b and alpha0 is not None:
+        R_o = 0.5 * (b["pitch_diameter_mm"] + b["ball_diameter_mm"] * math.cos(math.radians(alpha0)))
+        pitch = 2.0 * math.pi / b["balls"] * R_o
+        if not ds["spall_length_mm"][1] < pitch:
+            problems.append(f"dataset.spall_length_mm = {_fmt_value(ds['spall_length_mm'])}: the longest spall "
+                            f"must be shorter than the ball pitch {_fmt_num(pitch)} mm along the outer raceway: "
+                            "only one ball at a time may be over the spall")
+    if "radial_N" in ds and "axial_N" in ds and ds["radial_N"][0] <= 0.0 and ds["axial_N"][0] <= 0.0:
+        problems.append(f"dataset.radial_N = {_fmt_value(ds['radial_N'])} and dataset.axial_N = "
+                        f"{_fmt_value(ds['axial_N'])} both allow 0: an unloaded bearing has no solution; "
+                        "raise the minimum of one of them")
 
 
 def _study_problems(raw: dict, data: dict, base_ok: bool) -> list[str]:
@@ -889,7 +989,9 @@ class Case:
         for key, spec in SCHEMA[path].keys.items():
             if key in sec:
                 v = sec[key]
-                out[_si_name(key, spec)] = v * UNITS[spec.unit][0] if spec.type == "float" else v
+                f = UNITS[spec.unit][0]
+                out[_si_name(key, spec)] = (v * f if spec.type == "float" else
+                                            [x * f for x in v] if spec.type == "range" else v)
         return out
 
     def _material(self, path: str):
@@ -954,6 +1056,12 @@ class Case:
             return None
         return st["parameter"], list(st["values"])
 
+    def dataset_settings(self) -> dict | None:
+        """The [dataset] keys in SI without unit suffix (ranges as [min, max]), or None."""
+        if "dataset" not in self.data:
+            return None
+        return self._si("dataset")
+
     def dynamics_settings(self) -> dict:
         """The [dynamics] keys in SI without unit suffix: dict(duration=s, sample_rate=Hz, ...)."""
         return self._si("dynamics")
@@ -1008,7 +1116,8 @@ def schema_reference_markdown() -> str:
         out.append("|---|---|---|---|---|---|")
         for key, spec in sec.keys.items():
             typ = {"float": "float", "int": "integer", "bool": "boolean", "str": "string",
-                   "enum": "string", "numbers": "array of numbers"}[spec.type]
+                   "enum": "string", "numbers": "array of numbers",
+                   "range": "[min, max]"}[spec.type]
             if spec.default_doc is not None:
                 default = spec.default_doc
             elif spec.default is REQUIRED:
@@ -1028,6 +1137,8 @@ def schema_reference_markdown() -> str:
                 allowed = "`true`, `false`"
             elif spec.type == "numbers":
                 allowed = "non-empty"
+            elif spec.type == "range":
+                allowed = "min <= max" + (f"; each {spec.range_text()}" if spec.range_text() else "")
             else:
                 allowed = "any"
             out.append(f"| `{key}` | {typ} | {spec.unit_label or '-'} | {_md(default)} | {_md(allowed)} "

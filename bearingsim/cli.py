@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|dataset|demo``.
 
 Engineering units with the unit in every name; SI inside.  Exit codes: 0 success, 2 bad input,
 3 a solve did not converge, 4 an output could not be written.
@@ -458,6 +458,36 @@ def cmd_spectrum(args):
     return 0
 
 
+# ------------------------------------------------------------------------------------ dataset
+def cmd_dataset(args):
+    from .dataset import make_dataset, result_messages
+
+    case = _load(args.spec)
+    if case.data.get("dataset") is None:
+        raise CLIError(f"{args.spec}: no [dataset] section: add one with at least count = N "
+                       "(see the case reference)")
+    try:
+        s = make_dataset(case, args.output, progress=True)
+    except ValueError as e:
+        raise CLIError(str(e)) from None
+    print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
+          f"({s.seconds_per_item:.3f} s per item, compilation included)")
+    if s.failed:
+        import h5py
+
+        with h5py.File(args.output, "r") as f:
+            codes = f["labels"]["result"]
+        msgs = result_messages()
+        detail = ", ".join(f"{int(np.sum(codes == c))} {msgs.get(int(c), c)}"
+                           for c in np.unique(codes[codes != 0]))
+        print(f"bearingsim: warning: {s.failed} of {s.count} items failed ({detail}); their "
+              "signals are zero and labels/result != 0", file=sys.stderr)
+    else:
+        print("all items simulated successfully")
+    print(f"wrote {args.output}")
+    return 0
+
+
 # ------------------------------------------------------------------------------------ demo
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "demo.toml"
 
@@ -517,6 +547,11 @@ def build_parser():
     s.add_argument("input", metavar="OUT.h5")
     s.add_argument("--plot", metavar="PNG", help="write the envelope spectrum plot")
     s.set_defaults(func=cmd_spectrum)
+    s = sub.add_parser("dataset", help="labelled data set of simulated sensor signals ([dataset] "
+                       "ranges of speed, loads and spall); HDF5 output")
+    s.add_argument("spec", metavar="SPEC.toml")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
+    s.set_defaults(func=cmd_dataset)
     s = sub.add_parser("demo", help="run the default case end to end and write all results and plots")
     s.add_argument("--case", default=None, help="case file (default: the Harris 218 demo case)")
     s.add_argument("--out", default="results/demo", help="output folder (default results/demo)")
@@ -525,6 +560,11 @@ def build_parser():
 
 
 def main(argv=None):
+    import matplotlib
+
+    matplotlib.use("Agg")          # files only, no display needed
+    from .io import NonFiniteOutputError
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
@@ -532,7 +572,7 @@ def main(argv=None):
     except CLIError as e:
         print(f"bearingsim: error: {e}", file=sys.stderr)
         return e.code
-    except OSError as e:
+    except (OSError, NonFiniteOutputError) as e:
         print(f"bearingsim: error: cannot write output: {e}", file=sys.stderr)
         return EXIT_OUTPUT
 

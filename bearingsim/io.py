@@ -155,7 +155,7 @@ _STATE_FIELDS = {
     "ring_displacement": ("displacement", "x, y, axial in m; tilt_x, tilt_y in rad"),
     "stiffness": ("stiffness", STIFFNESS_UNITS),
     "iterations": ("iterations", "1"),
-    "residual_norm": ("residual_norm", "N"),
+    "residual_norm": ("residual_norm", "N (moments divided by R_i)"),
     "result": ("result", "1 (0 = converged; see bearingsim.RESULT_MESSAGES)"),
 }
 

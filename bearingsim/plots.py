@@ -1,11 +1,8 @@
 """Plots a bearing engineer would put in a report (matplotlib, no display needed)."""
 from __future__ import annotations
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 RAD2DEG = 180.0 / np.pi
 C_IN, C_OUT = "#1f77b4", "#d62728"

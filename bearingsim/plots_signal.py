@@ -8,12 +8,9 @@ from __future__ import annotations
 
 import re
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import matplotlib.transforms as mtransforms  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import matplotlib.transforms as mtransforms
+import numpy as np
 
 from .signal import EnvelopeSpectrum, Spectrum, _check_signal, defect_markers  # noqa: E402
 

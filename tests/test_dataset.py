@@ -1,0 +1,157 @@
+"""bearingsim dataset: [dataset] schema rows, label draw, HDF5 layout, reproducibility, labels vs signals."""
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
+from bearingsim.cli import _band, main
+from bearingsim.dataset import LABEL_FIELDS, draw_labels, make_dataset
+from bearingsim.signal import envelope_spectrum, peak_frequency
+
+ROOT = Path(__file__).resolve().parent.parent
+CWRU = (ROOT / "cases" / "cwru_6205.toml").read_text()
+
+
+def spec(duration=0.02, extra=""):
+    return parse_case((CWRU + f"""
+[dataset]
+count = 6
+chunk = 3
+seed = 7
+duration_s = {duration}
+healthy_fraction = 0.34
+speed_rpm = [1720, 1800]
+radial_N = [500, 2000]
+spall_length_mm = [0.3, 1.0]
+spall_depth_mm = [0.2794, 0.2794]
+spall_center_deg = [0, 0]
+{extra}""").replace("sample_rate_Hz = 48000", "sample_rate_Hz = 24000"), "spec.toml")
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ds")
+    case = spec()
+    s1 = make_dataset(case, d / "a.h5", progress=False)
+    s2 = make_dataset(case, d / "b.h5", progress=False)
+    return case, d / "a.h5", d / "b.h5", s1, s2
+
+
+def test_layout(files):
+    case, a, _, s, _ = files
+    assert s.count == 6 and s.samples == 480 and s.failed == 0
+    assert [p.name for p in a.parent.iterdir() if p.name.startswith(".")] == []  # no temp files left
+    with h5py.File(a, "r") as f:
+        sig, t, lab = f["signals"], f["time"], f["labels"]
+        assert sig.shape == (6, 480) and sig.dtype == np.float32 and sig.chunks == (1, 480)
+        assert sig.compression == "gzip" and sig.attrs["units"] == "m/s^2"
+        assert t.shape == (480,) and t.attrs["units"] == "s"
+        assert np.isclose(t[1] - t[0], 1 / 24000)
+        assert lab.shape == (6,) and list(lab.dtype.names) == list(LABEL_FIELDS)
+        assert json.loads(lab.attrs["field_units"])["spall_length_mm"] == "mm"
+        assert "units" in lab.attrs
+        assert f.attrs["seed"] == 7 and f.attrs["case_toml"] == case.text
+        assert "bearingsim_version" in f.attrs
+        L = lab[()]
+        assert np.all(np.isfinite(sig[()]))
+    assert list(L["index"]) == list(range(6))
+    assert list(L["healthy"]) == [True, True, False, False, False, False]   # round(0.34 * 6) = 2
+    assert np.all(L["result"] == 0)
+    assert np.all(L["spall_depth_mm"][:2] == 0) and np.all(L["spall_length_mm"][:2] == 0)
+    assert np.all(L["spall_depth_mm"][2:] == 0.2794)
+    assert np.all((L["spall_length_mm"][2:] >= 0.3) & (L["spall_length_mm"][2:] <= 1.0))
+    assert np.all((L["speed_rpm"] >= 1720) & (L["speed_rpm"] <= 1800))
+    assert np.all((L["radial_N"] >= 500) & (L["radial_N"] <= 2000)) and np.all(L["axial_N"] == 0)
+    assert np.allclose(L["shaft_Hz"], L["speed_rpm"] / 60)
+    assert np.allclose(L["bpfo_Hz"], 9 * L["ftf_Hz"])
+    assert np.all((L["bpfo_Hz"] > 95) & (L["bpfo_Hz"] < 115))   # ~3.58 x shaft for the 6205
+
+
+def test_reproducible(files):
+    case, a, b, _, _ = files
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        assert np.array_equal(fa["signals"][()], fb["signals"][()])
+        assert fa["labels"][()].tobytes() == fb["labels"][()].tobytes()
+    assert draw_labels(case).tobytes() == draw_labels(case).tobytes()
+    other = draw_labels(spec(extra="").with_value("dataset.seed", 8))
+    assert not np.array_equal(other["speed_rpm"], draw_labels(case)["speed_rpm"])
+
+
+def test_labels_match_signals(files):
+    _, a, _, _, _ = files
+    with h5py.File(a, "r") as f:
+        x, L = f["signals"][()], f["labels"][()]
+    rms = x.std(axis=1)
+    assert rms[L["healthy"]].max() < 0.05 * rms[~L["healthy"]].min(), rms
+
+
+def test_envelope_peak_at_labelled_bpfo(tmp_path):
+    case = spec(duration=0.05)
+    make_dataset(case, tmp_path / "e.h5", progress=False)
+    with h5py.File(tmp_path / "e.h5", "r") as f:
+        x, L, t = f["signals"][()], f["labels"][()], f["time"][()]
+    fs = 1.0 / (t[1] - t[0])
+    band = _band(fs, case.dynamics_settings()["resonance_frequency"])
+    for i in np.flatnonzero(~L["healthy"]):
+        es = envelope_spectrum(x[i].astype(float), fs, band=band)
+        fp = peak_frequency(es, L["bpfo_Hz"][i], rel_window=0.1)
+        assert abs(fp - L["bpfo_Hz"][i]) / L["bpfo_Hz"][i] < 0.03, (i, fp, L["bpfo_Hz"][i])
+
+
+@pytest.mark.parametrize("row, key, what", [
+    ("count = 0", "dataset.count", "out of range"),
+    ("chunk = 1.5", "dataset.chunk", "wrong type"),
+    ("healthy_fraction = 1.5", "dataset.healthy_fraction", "out of range"),
+    ("speed_rpm = [1800, 1700]", "dataset.speed_rpm", "min > max"),
+    ("radial_N = [500]", "dataset.radial_N", "exactly two elements"),
+    ("radial_N = [500, 1000, 2000]", "dataset.radial_N", "exactly two elements"),
+    ("axial_N = [0, \"a\"]", "dataset.axial_N", "two finite numbers"),
+    ("axial_N = 5.0", "dataset.axial_N", "wrong type"),
+    ("spall_length_mm = [0, 1]", "dataset.spall_length_mm", "out of range"),
+    ("spall_depth_mm = [0.1, 9.0]", "dataset.spall_depth_mm", "less than bearing.ball_diameter_mm"),
+    ("spall_length_mm = [0.5, 30.0]", "dataset.spall_length_mm", "ball pitch"),
+])
+def test_bad_dataset_input(row, key, what):
+    with pytest.raises(CaseError) as e:
+        parse_case(CWRU + "\n[dataset]\ncount = 4\n" * (not row.startswith("count")) +
+                   ("\n[dataset]\n" if row.startswith("count") else "") + row + "\n", "s.toml")
+    assert len(e.value.problems) == 1, e.value.problems
+    assert key in str(e.value) and what in str(e.value)
+
+
+def test_dataset_defaults_and_requirements():
+    c = parse_case(CWRU + "\n[dataset]\ncount = 4\n")
+    ds = c.data["dataset"]
+    assert ds["speed_rpm"] == [1797.0, 1797.0] and ds["radial_N"] == [1000.0, 1000.0]
+    assert ds["spall_length_mm"] == [0.5334, 0.5334] and ds["chunk"] == 16 and ds["seed"] == 0
+    assert ds["duration_s"] == 0.1 and ds["healthy_fraction"] == 0.2
+    si = c.dataset_settings()
+    assert np.isclose(si["speed"][0], 1797 * 2 * np.pi / 60) and np.isclose(si["spall_length"][1], 0.5334e-3)
+    no_defect = CWRU.split("[defect]")[0] + "[dataset]\ncount = 4\n"
+    with pytest.raises(CaseError) as e:
+        parse_case(no_defect, "s.toml")
+    assert "dataset.spall_length_mm" in str(e.value) and "dataset.spall_depth_mm" in str(e.value)
+    with pytest.raises(CaseError, match="both allow 0"):
+        parse_case(CWRU + "\n[dataset]\ncount = 4\nradial_N = [0, 10]\n")
+    assert "## [dataset]" in schema_reference_markdown()
+    assert parse_case(CWRU).dataset_settings() is None
+
+
+def test_shipped_spec_is_valid():
+    c = load_case(ROOT / "cases" / "dataset_cwru.toml")
+    assert c.data["dataset"]["count"] == 1000 and c.data["dataset"]["chunk"] == 16
+
+
+def test_cli_bad_input(tmp_path, capsys):
+    p = tmp_path / "bad.toml"
+    p.write_text(CWRU + "\n[dataset]\ncount = 4\nspeed_rpm = [1800, 1700]\n")
+    assert main(["dataset", str(p), "-o", str(tmp_path / "x.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "dataset.speed_rpm" in err and "min > max" in err
+    assert not (tmp_path / "x.h5").exists()
+    p.write_text(CWRU)
+    assert main(["dataset", str(p), "-o", str(tmp_path / "x.h5")]) == 2
+    assert "no [dataset] section" in capsys.readouterr().err
