@@ -488,6 +488,86 @@ def cmd_dataset(args):
     return 0
 
 
+# ------------------------------------------------------------------------------------ compare
+def compare_static_dynamic(case, max_angles=721):
+    """Quasi-static sweep at the cage angles of a dynamic run (subsampled to ``max_angles``).
+
+    Returns (dynamics result, indices of the compared samples, sweep solution, table rows) where
+    each row is (quantity, unit, quasi-static peak, dynamic peak, dynamic / quasi-static)."""
+    from .dynamics import simulate_case
+    from .sweep import sweep
+
+    res = simulate_case(case, throw=False)
+    if res.result != 0:
+        raise CLIError(f"{case.source}: the dynamic simulation failed (result {res.result})", EXIT_SOLVE)
+    th = np.asarray(res.cage_angle)
+    idx = np.unique(np.linspace(0, len(th) - 1, min(len(th), max_angles)).astype(int))
+    qs = sweep(case.bearing(), case.operation(), case.loads(), case.spall(), angles=th[idx],
+               hertz_method=case.hertz_method)
+    rows = []
+
+    def ratio(d, s, tol):        # amplification only where the static value is not ~0
+        return d / s if abs(s) > tol else np.nan
+
+    for name, unit, f, tol in (("Q_outer", "N", 1.0, 1e-6), ("Q_inner", "N", 1.0, 1e-6),
+                               ("alpha_outer", "deg", RAD2DEG, 1e-3), ("alpha_inner", "deg", RAD2DEG, 1e-3)):
+        d = np.asarray(getattr(res, name))[idx] * f
+        s = np.asarray(getattr(qs, name)) * f
+        rows.append((f"max {name}", unit, s.max(), d.max(), ratio(d.max(), s.max(), tol)))
+        if name.startswith("alpha"):
+            rows.append((f"min {name}", unit, s.min(), d.min(), ratio(d.min(), s.min(), tol)))
+    qd = np.asarray(res.ring_displacement)[idx] * 1e6
+    qq = np.asarray(qs.displacement)[:, :3] * 1e6
+    for j, lab in enumerate(("x", "y", "axial")):
+        amp_s, amp_d = np.ptp(qq[:, j]), np.ptp(qd[:, j])
+        rows.append((f"peak-to-peak ring {lab}", "um", amp_s, amp_d, ratio(amp_d, amp_s, 1e-6)))
+    return res, idx, qs, rows
+
+
+def cmd_compare(args):
+    case = _load(args.case)
+    if case.data.get("dynamics") is None:
+        raise CLIError(f"{args.case}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
+    res, idx, qs, rows = compare_static_dynamic(case)
+    bad = int(np.sum(np.asarray(qs.result) != 0))
+    print(f"{case.title}: quasi-static sweep at {len(idx)} cage angles of the dynamic run "
+          f"({float(res.time[-1]):.4f} s){'; %d angles did not converge' % bad if bad else ''}")
+    print(_fmt_table(("quantity", "unit", "quasi-static", "dynamic", "dynamic / static"), rows,
+                     ("{}", "{}", "{:.3f}", "{:.3f}", "{:.3f}")))
+    if args.plot:
+        import matplotlib.pyplot as plt
+
+        d = Path(args.plot)
+        d.mkdir(parents=True, exist_ok=True)
+        th = np.unwrap(np.asarray(res.cage_angle)) * RAD2DEG
+        Qo = np.asarray(res.Q_outer)
+        j = int(np.argmax(np.ptp(Qo[idx], axis=0)))
+        fig, axes = plt.subplots(2, 2, figsize=(13, 7.5), constrained_layout=True)
+        for ax, (name, lab, f) in zip(axes.ravel()[:3], (("Q_outer", "$Q_o$ (N)", 1.0), ("Q_inner", "$Q_i$ (N)", 1.0),
+                                                          ("alpha_outer", r"$\alpha_o$ (deg)", RAD2DEG))):
+            ax.plot(th, np.asarray(getattr(res, name))[:, j] * f, lw=0.9, label=f"dynamic, ball {j}")
+            ax.plot(th[idx], np.asarray(getattr(qs, name))[:, j] * f, ".", ms=3, label="quasi-static sweep")
+            ax.set_xlabel("cage angle θ_c (deg)")
+            ax.set_ylabel(lab)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8)
+        ax = axes[1, 1]
+        qd = np.asarray(res.ring_displacement) * 1e6
+        for k, lab in enumerate(("x", "y", "axial")):
+            line, = ax.plot(th, qd[:, k], lw=0.9, label=f"{lab} dynamic")
+            ax.plot(th[idx], np.asarray(qs.displacement)[:, k] * 1e6, ".", ms=3, color=line.get_color(),
+                    label=f"{lab} quasi-static")
+        ax.set_xlabel("cage angle θ_c (deg)")
+        ax.set_ylabel("ring displacement (µm)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=2)
+        fig.suptitle(f"{case.title}: static vs swept vs dynamic")
+        fig.savefig(d / "compare.png", dpi=120)
+        plt.close(fig)
+        print(f"wrote {d / 'compare.png'}")
+    return 0
+
+
 # ------------------------------------------------------------------------------------ demo
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "cases" / "demo.toml"
 
@@ -552,6 +632,10 @@ def build_parser():
     s.add_argument("spec", metavar="SPEC.toml")
     s.add_argument("-o", "--output", required=True, metavar="OUT.h5")
     s.set_defaults(func=cmd_dataset)
+    s = sub.add_parser("compare", help="quasi-static sweep and dynamic run side by side, with amplification")
+    s.add_argument("case")
+    s.add_argument("--plot", metavar="DIR", help="write compare.png into DIR")
+    s.set_defaults(func=cmd_compare)
     s = sub.add_parser("demo", help="run the default case end to end and write all results and plots")
     s.add_argument("--case", default=None, help="case file (default: the Harris 218 demo case)")
     s.add_argument("--out", default="results/demo", help="output folder (default results/demo)")
