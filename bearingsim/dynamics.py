@@ -379,7 +379,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | None = None,
     max_steps = _max_steps(t1, params, rtol) if max_steps is None else int(max_steps)
     progress = (float(duration) >= 0.2) if progress is None else bool(progress)
     ys, code, nsteps = _integrate_jit(model, y0, jnp.asarray(ts), jump_ts,
-                                      _dtmax(bearing, spall, omega_c, params),
+                                      jnp.float64(_dtmax(bearing, spall, omega_c, params)),
                                       jnp.float64(rtol), jnp.float64(atol), max_steps, progress)
     code = int(code) if int(sol.result) == 0 else 3
     if throw and code != 0:
@@ -503,7 +503,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     keys = jax.random.split(jax.random.PRNGKey(int(seed)), n)
     a_r, rel, code, nsteps, wc = _batch_integrate_jit(
         bearing, op, loads, spall, sols, params, th, curve,
-        jnp.asarray(ts), jump_ts, dtmax, jnp.float64(rtol), jnp.float64(atol), max_steps, keys,
+        jnp.asarray(ts), jump_ts, jnp.float64(dtmax), jnp.float64(rtol), jnp.float64(atol), max_steps, keys,
         jnp.float64(noise_rms), int(ball_iterations))
     return DynamicsBatchResult(ts, a_r, rel, code, nsteps, wc, bearing.n_balls * wc / (2 * np.pi))
 

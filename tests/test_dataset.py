@@ -155,3 +155,33 @@ def test_cli_bad_input(tmp_path, capsys):
     p.write_text(CWRU)
     assert main(["dataset", str(p), "-o", str(tmp_path / "x.h5")]) == 2
     assert "no [dataset] section" in capsys.readouterr().err
+
+
+def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch, capsys):
+    """A failed item (result != 0) or a non-finite signal is written as zeros with result != 0."""
+    import bearingsim.dataset as dsm
+    import bearingsim.dynamics as dyn
+
+    def fake_batch(bearing, speed_rpm, loads, *a, **kw):
+        n = len(speed_rpm)
+        x = np.ones((n, 480))
+        x[0, 5] = np.nan                       # item in the first slot: non-finite signal
+        code = np.zeros(n, int)
+        code[1] = 1                            # second slot: max steps reached
+        x[1] = np.nan
+        return dyn.DynamicsBatchResult(np.arange(480) / 24000.0, x, None, code, np.zeros(n),
+                                       np.full(n, 10.0), np.full(n, np.nan))
+
+    monkeypatch.setattr(dyn, "simulate_batch", fake_batch)
+    monkeypatch.setattr(dsm, "_ball_iterations", lambda *a: 3)
+    p = tmp_path / "spec.toml"
+    p.write_text(spec().text)
+    assert main(["dataset", str(p), "-o", str(tmp_path / "f.h5")]) == 0
+    err = capsys.readouterr().err
+    assert "4 of 6 items failed" in err
+    with h5py.File(tmp_path / "f.h5", "r") as f:
+        x, L = f["signals"][()], f["labels"][()]
+    bad = L["result"] != 0
+    assert bad.sum() == 4 and set(L["result"][bad]) == {1, dsm.RESULT_NONFINITE}
+    assert np.all(x[bad] == 0) and np.all(x[~bad] == 1)
+    assert np.all(np.isfinite(L["bpfo_Hz"])) and np.all(L["bpfo_Hz"] == 0)
