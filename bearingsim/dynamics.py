@@ -21,8 +21,9 @@ Bearing force.  At each instant the relative ring displacement is
 freedom and are held at their quasi-static values at ``theta_c0`` (moments are therefore not
 balanced dynamically; for the radial / thrust cases of interest the tilts are ~0).  Every
 ball's 2x2 Jones equilibrium (centrifugal force, gyroscopic moment, spall depth H(psi_j)) is
-solved by :func:`bearingsim.jones.balls_at` (Newton from the omega = 0 closed form, vmapped over
-balls); the ring load ``R = [Fx, Fy, Fz]`` the bearing carries follows from
+solved from the omega = 0 closed form by a fixed number of Newton steps per ball, vmapped over
+balls (``balls_fixed``; the count is checked against :func:`bearingsim.jones.balls_at` by
+``choose_iterations``, which falls back to ``balls_at``); the ring load ``R = [Fx, Fy, Fz]`` the bearing carries follows from
 ``_reactions_from_balls``.  Equations of motion::
 
     m_s a_s = F_ext + F_u(t) - R - C_b v_rel                        (x, y, z)
@@ -512,29 +513,13 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
 def _newton_setup(bearing, op, A1, A2, H_def, curve, wm_undropped):
     """(start in um, Newton step) of the ball problem: the damped Newton step of
     ``jones.solve_ball`` (step cap, never leave the outer raceway at speed)."""
-    from .jones import UM, KN, _static_ball_position, ball_state
+    from .jones import UM, _static_ball_position, ball_newton_step
 
-    D = bearing.ball_diameter
-    cap = 2e-3 * D / UM
     x0, d_c = _static_ball_position(bearing, op, A1, A2, H_def, curve)
-
-    def f(y):
-        st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
-        return jnp.stack([st.r_axial, st.r_radial]) / KN
+    _, full_step = ball_newton_step(bearing, op, A1, A2, H_def, curve, wm_undropped, d_c)
 
     def step(y):
-        J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
-        mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
-        dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
-        n = jnp.max(jnp.abs(dy))
-        dy = jnp.where(n > cap, dy * (cap / n), dy)
-        dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, 0.0)
-        y_new = y + dy
-        Lo = jnp.sqrt(y_new[0] ** 2 + y_new[1] ** 2) * UM
-        d_o = Lo - (bearing.f_outer - 0.5) * D - H_def
-        lift = (d_c > 0.0) & (d_o <= 0.0)
-        target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
-        return jnp.where(lift, y_new * target, y_new)
+        return full_step(y)[0]
 
     return x0 / UM, step
 

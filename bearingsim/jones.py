@@ -154,6 +154,35 @@ def _static_ball_position(bearing, op, A1, A2, H_def, curve):
 _BALL_MAXIT = 40
 
 
+def ball_newton_step(bearing, op, A1, A2, H_def, curve, wm_undropped, d_c):
+    """The damped Newton step of one ball's 2x2 equilibrium in micrometres, shared by the exact
+    solve (:func:`solve_ball`) and the fixed-step solver of the dynamics: ``(f, step)`` with
+    ``step(y) -> (y_new, |dy|_max, r)``.  The step is capped at ~ a contact deflection, and at
+    speed (``d_c > 0``) a ball never leaves its outer raceway (F_c would bring it back)."""
+    D = bearing.ball_diameter
+    cap = 2e-3 * D / UM          # step cap (um): ~ a contact deflection
+
+    def f(y):
+        st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
+        return jnp.stack([st.r_axial, st.r_radial]) / KN
+
+    def step(y):
+        J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
+        mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
+        dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
+        n = jnp.max(jnp.abs(dy))
+        dy = jnp.where(n > cap, dy * (cap / n), dy)
+        dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, 0.0)
+        y_new = y + dy
+        Lo = jnp.sqrt(y_new[0] ** 2 + y_new[1] ** 2) * UM
+        d_o = Lo - (bearing.f_outer - 0.5) * D - H_def
+        lift = (d_c > 0.0) & (d_o <= 0.0)
+        target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
+        return jnp.where(lift, y_new * target, y_new), n, r
+
+    return f, step
+
+
 def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None, x_init=None):
     """Ball-centre position (m) in equilibrium for groove-centre offsets (A1, A2) and spall depth.
 
@@ -162,17 +191,13 @@ def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None, x_init=None
     (implicit function theorem via ``lax.custom_root``; the start does not enter derivatives).
     """
     D = bearing.ball_diameter
-    cap = 2e-3 * D / UM          # step cap (um): ~ a contact deflection
     x0, d_c = _static_ball_position(bearing, op, A1, A2, H_def, curve)
     if x_init is not None:
         Lo = jnp.sqrt(x_init[0] ** 2 + x_init[1] ** 2)
         usable = jnp.all(jnp.isfinite(x_init)) & (Lo > 0.0) & (
             (d_c <= 0.0) | (Lo - (bearing.f_outer - 0.5) * D - H_def > 0.0))
         x0 = jnp.where(usable, lax.stop_gradient(x_init), x0)
-
-    def f(y):
-        st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
-        return jnp.stack([st.r_axial, st.r_radial]) / KN
+    f, step = ball_newton_step(bearing, op, A1, A2, H_def, curve, wm_undropped, d_c)
 
     def newton(f, y0):
         scale = jnp.maximum(jnp.max(jnp.abs(y0)), 1.0)
@@ -183,20 +208,8 @@ def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None, x_init=None
 
         def body(c):
             y, it, _ = c
-            J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
-            mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
-            dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
-            n = jnp.max(jnp.abs(dy))
-            dy = jnp.where(n > cap, dy * (cap / n), dy)
-            dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, 0.0)
-            y_new = y + dy
-            # never leave the outer raceway at speed: F_c would bring the ball back
-            Lo = jnp.sqrt(y_new[0] ** 2 + y_new[1] ** 2) * UM
-            d_o = Lo - (bearing.f_outer - 0.5) * D - H_def
-            lift = (d_c > 0.0) & (d_o <= 0.0)
-            target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
-            y_new = jnp.where(lift, y_new * target, y_new)
-            done = (n <= 1e-10 * scale) | (jnp.max(jnp.abs(r)) <= 1e-15) | ~jnp.all(jnp.isfinite(dy))
+            y_new, n, r = step(y)
+            done = (n <= 1e-10 * scale) | (jnp.max(jnp.abs(r)) <= 1e-15) | ~jnp.isfinite(n)
             return y_new, it + 1, done
 
         y, _, _ = lax.while_loop(cond, body, (y0, jnp.int32(0), jnp.bool_(False)))
