@@ -8,6 +8,16 @@ RAD2DEG = 180.0 / np.pi
 C_IN, C_OUT = "#1f77b4", "#d62728"
 
 
+def _finish(fig, title, path, dpi=120):
+    """Common tail of every report figure: title, save (then close) when a path is given."""
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
+    return fig
+
+
 def _closed(a):
     a = np.asarray(a)
     return np.concatenate([a, a[:1]])
@@ -81,12 +91,7 @@ def plot_static(sol, title="", spall=None, path=None):
     rpm = float(sol.cage_speed) * 60 / (2 * np.pi)
     ax.set_title(f"ring: x {q[0]*1e6:.2f} µm, y {q[1]*1e6:.2f} µm, axial {q[2]*1e6:.2f} µm, "
                  f"tilt {q[3]*1e3:.3f}/{q[4]*1e3:.3f} mrad; cage {rpm:.0f} rpm", fontsize=9)
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=130)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path, dpi=130)
 
 
 # ------------------------------------------------------------------------------- sweeps
@@ -176,12 +181,7 @@ def plot_sweep(sweep_sol, title="", spall=None, path=None):
     axc.ticklabel_format(useOffset=False)
     if np.any(bad):
         fig.text(0.01, 0.01, f"{int(bad.sum())} angle(s) did not converge (red lines)", color="red")
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path, dpi=120)
 
 
 def plot_study(study_sols, values, parameter, unit_label="", title="", spall=None, path=None):
@@ -232,9 +232,4 @@ def plot_study(study_sols, values, parameter, unit_label="", title="", spall=Non
     axt.set_xlabel("ball position relative to the spall centre (deg)")
     axt.set_ylabel("$Q_o$ (solid), $Q_i$ (dashed) of the passing ball (N)")
     axt.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path, dpi=120)
