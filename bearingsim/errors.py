@@ -1,0 +1,89 @@
+"""One vocabulary for what can go wrong: result codes and exceptions.
+
+* Result codes are integer enumerations (:class:`ResultCode` subclasses, one per layer) whose
+  members carry a ``message`` and a ``hint``.  They are plain ``int`` values, so they travel
+  through ``jit`` / ``vmap`` as int32 arrays and compare with ``==`` against the members.
+* Exceptions derive from :class:`BearingsimError`; there is one subclass per kind of failure,
+  and each kind has the exit code the command line uses for it:
+
+  ====================== ==== ==================================================
+  kind                   exit meaning
+  ====================== ==== ==================================================
+  :class:`InputError`       2 a case file, key, value or argument is wrong
+  :class:`NotConvergedError` 3 a solve did not converge
+  :class:`InvalidStateError` 3 a solve ended on a state that is not physical
+  :class:`OutputError`      4 a result could not be written (or was not finite)
+  ====================== ==== ==================================================
+
+Every entry point that can fail has ``throw=True`` by default (raise the exception) and
+``throw=False`` (return the result with its code; batches are flagged per item).
+"""
+from __future__ import annotations
+
+import enum
+
+__all__ = [
+    "ResultCode",
+    "BearingsimError",
+    "InputError",
+    "NotConvergedError",
+    "InvalidStateError",
+    "OutputError",
+]
+
+
+class ResultCode(enum.IntEnum):
+    """Base of the result-code enumerations: ``Member(value, message, hint)``."""
+
+    def __new__(cls, value, message, hint=""):
+        obj = int.__new__(cls, value)
+        obj._value_ = value
+        obj.message = message
+        obj.hint = hint
+        return obj
+
+    @classmethod
+    def of(cls, code) -> "ResultCode":
+        """The member for an integer code (or a 0-d array)."""
+        return cls(int(code))
+
+    def describe(self) -> str:
+        """``message`` followed by the hint, for people."""
+        return f"{self.message}. Hint: {self.hint}" if self.hint else self.message
+
+
+class BearingsimError(Exception):
+    """Base of every error bearingsim raises on purpose.  ``exit_code``: the CLI's exit status."""
+
+    exit_code = 1
+
+    def __init__(self, message: str, hint: str = "", code: ResultCode | None = None):
+        super().__init__(message + (f"\nHint: {hint}" if hint else ""))
+        self.message = message
+        self.hint = hint
+        self.code = code
+
+
+class InputError(BearingsimError, ValueError):
+    """Bad input: a case file, key, value or argument (exit code 2)."""
+
+    exit_code = 2
+
+
+class NotConvergedError(BearingsimError, RuntimeError):
+    """A solve did not converge (exit code 3)."""
+
+    exit_code = 3
+
+
+class InvalidStateError(NotConvergedError):
+    """A solve ended on a state that breaks the model's rules (an inverted contact, equilibrium
+    not held, deformations beyond the documented bounds): never reported as converged (exit 3)."""
+
+    exit_code = 3
+
+
+class OutputError(BearingsimError, OSError):
+    """A result could not be written, or holds non-finite values (exit code 4)."""
+
+    exit_code = 4
