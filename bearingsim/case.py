@@ -22,8 +22,8 @@ table, so a new key is one new row; :func:`schema_reference_markdown` renders th
 reference page of the documentation.  Units are part of the key names (``_mm``, ``_deg``,
 ``_rpm``, ``_N``, ``_Nm``, ``_GPa``, ``_kg_m3``, ``_s``, ``_Hz``); :class:`Case` converts to SI.
 
-All problems of a case are collected and raised together as one :class:`CaseError` (a
-``ValueError``) whose message has one line per problem, each prefixed by the source file name.
+All problems of a case are collected and raised together as one :class:`CaseError` (an
+:class:`~bearingsim.errors.InputError`, hence a ``ValueError``) whose message has one line per problem, each prefixed by the source file name.
 
 This module sits at the edge of the package: it may read files; the core never does.
 """
@@ -38,6 +38,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from .errors import InputError
 
 __all__ = [
     "CaseError",
@@ -54,9 +56,10 @@ __all__ = [
 ]
 
 
-class CaseError(ValueError):
-    """Invalid case.  ``problems`` lists the problems (without the source prefix), ``source``
-    names the file; the message has one line ``<source>: <problem>`` per problem."""
+class CaseError(InputError):
+    """Invalid case (an :class:`~bearingsim.errors.InputError`, exit code 2).  ``problems`` lists
+    the problems (without the source prefix), ``source`` names the file; the message has one line
+    ``<source>: <problem>`` per problem."""
 
     def __init__(self, source: str, problems: list[str]):
         self.source = source

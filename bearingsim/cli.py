@@ -11,26 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
-EXIT_INPUT, EXIT_SOLVE, EXIT_OUTPUT = 2, 3, 4
+from .errors import BearingsimError, InputError, NotConvergedError, OutputError
+
 RAD2DEG = 180.0 / np.pi
 
 
-class CLIError(Exception):
-    def __init__(self, msg, code=EXIT_INPUT):
-        super().__init__(msg)
-        self.code = code
-
-
 def _load(path):
-    from .case import CaseError, load_case
+    from .case import load_case
 
     p = Path(path)
     if not p.is_file():
-        raise CLIError(f"{path}: no such case file")
-    try:
-        return load_case(p)
-    except CaseError as e:
-        raise CLIError(str(e)) from None
+        raise InputError(f"{path}: no such case file")
+    return load_case(p)
 
 
 def _fmt_table(headers, rows, fmts):
@@ -142,11 +134,11 @@ def cmd_static(args):
     case = _load(args.case)
     sol = solve_case(case, throw=False)
     if int(sol.result) != 0:
-        raise CLIError(f"{args.case}: the quasi-static solve did not converge: {sol.message()[0]} "
-                       f"(ring residual {float(sol.residual_norm):.3g} N after {int(sol.iterations)} "
-                       "iterations). Hint: check that the bearing can carry these loads (an angular "
-                       "contact bearing needs axial load in its contact direction), or lower the speed.",
-                       EXIT_SOLVE)
+        raise NotConvergedError(
+            f"{args.case}: the quasi-static solve did not converge: {sol.message()[0]} "
+            f"(ring residual {float(sol.residual_norm):.3g} N after {int(sol.iterations)} iterations)",
+            hint="check that the bearing can carry these loads (an angular contact bearing needs "
+                 "axial load in its contact direction), or lower the speed.")
     print(static_text(case, sol))
     if args.json:
         io.write_json(args.json, io.static_to_dict(sol))
@@ -225,11 +217,11 @@ def run_study(case, progress=True):
 
     spec = case.study_settings()
     if spec is None:
-        raise CLIError(f"{case.source}: no [study] section: add one, e.g.\n[study]\n"
+        raise InputError(f"{case.source}: no [study] section: add one, e.g.\n[study]\n"
                        'parameter = "operation.speed_rpm"\nvalues = [0, 5000, 10000]')
     param, values = spec
     if param == "bearing.balls":
-        raise CLIError(f"{case.source}: study.parameter = 'bearing.balls' changes the number of balls "
+        raise InputError(f"{case.source}: study.parameter = 'bearing.balls' changes the number of balls "
                        "and so the shape of every result; run one sweep per ball count instead")
     from tqdm import tqdm
 
@@ -390,9 +382,9 @@ def cmd_simulate(args):
     d = case.dynamics_settings()
     res = simulate_case(case, throw=False)
     if res.result != 0:
-        raise CLIError(f"{args.case}: the dynamic simulation failed: {RESULT_MESSAGES[res.result]} "
-                       f"after {res.num_steps} steps. Hint: loosen [dynamics] rtol/atol or check the "
-                       "structural parameters.", EXIT_SOLVE)
+        raise NotConvergedError(f"{args.case}: the dynamic simulation failed: {RESULT_MESSAGES[res.result]} "
+                                f"after {res.num_steps} steps",
+                                hint="loosen [dynamics] rtol/atol or check the structural parameters.")
     Z = case.bearing().n_balls
     io.write_h5(args.output, {"dynamics": simulate_datasets(res, Z)},
                 attrs={"case_toml": case.text, "title": case.title})
@@ -423,7 +415,7 @@ def cmd_spectrum(args):
             fr = {k: float(g.attrs[k]) for k in ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
             toml = f.attrs.get("case_toml", "")
     except (OSError, KeyError) as e:
-        raise CLIError(f"{args.input}: not a bearingsim simulate output ({e})")
+        raise InputError(f"{args.input}: not a bearingsim simulate output ({e})")
     fs = 1.0 / float(t[1] - t[0])
     f_n = 3000.0
     if toml:
@@ -437,7 +429,7 @@ def cmd_spectrum(args):
     try:
         fp = peak_frequency(es, bpfo, rel_window=0.05)
     except ValueError as e:
-        raise CLIError(f"{args.input}: no envelope peak near BPFO {bpfo:.3f} Hz: {e}", EXIT_SOLVE)
+        raise NotConvergedError(f"{args.input}: no envelope peak near BPFO {bpfo:.3f} Hz: {e}")
     print(f"{args.input}: {t.size} samples at {fs:.0f} Hz ({t[-1] - t[0] + 1 / fs:.4f} s), "
           f"band {band[0]:.0f}-{band[1]:.0f} Hz, resolution {es.resolution:.3f} Hz")
     print(f"envelope peak near BPFO: {fp:.4f} Hz; reported bpfo_Hz {bpfo:.4f} Hz; "
@@ -463,13 +455,7 @@ def cmd_dataset(args):
     from .dataset import make_dataset, result_messages
 
     case = _load(args.spec)
-    if case.data.get("dataset") is None:
-        raise CLIError(f"{args.spec}: no [dataset] section: add one with at least count = N "
-                       "(see the case reference)")
-    try:
-        s = make_dataset(case, args.output, progress=True)
-    except ValueError as e:
-        raise CLIError(str(e)) from None
+    s = make_dataset(case, args.output, progress=True)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
           f"({s.seconds_per_item:.3f} s per item, compilation included)")
     if s.failed:
@@ -499,7 +485,7 @@ def compare_static_dynamic(case, max_angles=721):
 
     res = simulate_case(case, throw=False)
     if res.result != 0:
-        raise CLIError(f"{case.source}: the dynamic simulation failed (result {res.result})", EXIT_SOLVE)
+        raise NotConvergedError(f"{case.source}: the dynamic simulation failed (result {res.result})")
     th = np.asarray(res.cage_angle)
     idx = np.unique(np.linspace(0, len(th) - 1, min(len(th), max_angles)).astype(int))
     qs = sweep(case.bearing(), case.operation(), case.loads(), case.spall(), angles=th[idx],
@@ -527,7 +513,7 @@ def compare_static_dynamic(case, max_angles=721):
 def cmd_compare(args):
     case = _load(args.case)
     if case.data.get("dynamics") is None:
-        raise CLIError(f"{args.case}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
+        raise InputError(f"{args.case}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
     res, idx, qs, rows = compare_static_dynamic(case)
     bad = int(np.sum(np.asarray(qs.result) != 0))
     print(f"{case.title}: quasi-static sweep at {len(idx)} cage angles of the dynamic run "
@@ -647,18 +633,16 @@ def main(argv=None):
     import matplotlib
 
     matplotlib.use("Agg")          # files only, no display needed
-    from .io import NonFiniteOutputError
-
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except CLIError as e:
+    except BearingsimError as e:     # the one place where errors become exit codes
         print(f"bearingsim: error: {e}", file=sys.stderr)
-        return e.code
-    except (OSError, NonFiniteOutputError) as e:
+        return e.exit_code
+    except OSError as e:             # a file the system refused outside bearingsim.io (plots)
         print(f"bearingsim: error: cannot write output: {e}", file=sys.stderr)
-        return EXIT_OUTPUT
+        return OutputError.exit_code
 
 
 if __name__ == "__main__":

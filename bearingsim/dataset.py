@@ -14,8 +14,9 @@ chunk padded so nothing recompiles) and streamed into one HDF5 file, written ato
 
 Root attributes ``bearingsim_version``, ``case_toml``, ``seed`` (and ``count``,
 ``sample_rate_Hz``, ``duration_s``, ``balls``).  Items whose simulation failed keep a zero signal
-and a result code != 0 (:func:`result_messages`); nothing written is NaN.  ``/labels`` has the
-attributes ``field_units`` and ``result_messages`` (JSON objects).
+and a result code != 0 (:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus
+``nonfinite_signal``); nothing written is NaN.  ``/labels`` has the attributes ``field_units``
+and ``result_messages`` (JSON objects).
 """
 from __future__ import annotations
 
@@ -26,9 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from . import dynamics
 from ._version import __version__
+from .errors import InputError, ResultCode
 
-__all__ = ["LABEL_FIELDS", "RESULT_NONFINITE", "DatasetSummary", "draw_labels", "make_dataset"]
+__all__ = ["LABEL_FIELDS", "DatasetResult", "DatasetSummary", "draw_labels", "make_dataset",
+           "result_messages"]
 
 #: label field -> (numpy dtype, unit)
 LABEL_FIELDS: dict[str, tuple[str, str]] = {
@@ -50,14 +54,34 @@ LABEL_DTYPE = np.dtype([(k, v[0]) for k, v in LABEL_FIELDS.items()])
 #: ranges of [dataset], in the order they are drawn
 _RANGES = ("speed_rpm", "radial_N", "axial_N", "spall_length_mm", "spall_depth_mm", "spall_center_deg")
 
-#: the simulation codes of bearingsim.dynamics, plus 4 for a non-finite signal
-RESULT_NONFINITE = 4
+#: names of the dynamics' result codes while bearingsim.dynamics still has a plain dict of them
+_DYNAMICS_NAMES = {0: "successful", 1: "max_steps_reached", 2: "integration_failed",
+                   3: "initial_state_not_converged"}
+
+
+def _result_members():
+    """(name, (code, message, hint)) of the dynamics' result codes, then ``nonfinite_signal``
+    (4, or the first code after the dynamics' own)."""
+    codes = getattr(dynamics, "RESULTS", None)
+    if codes is not None:
+        members = [(m.name, (int(m), m.message, m.hint)) for m in codes]
+    else:
+        members = [(_DYNAMICS_NAMES.get(c, f"code_{c}"), (c, msg, ""))
+                   for c, msg in dynamics.RESULT_MESSAGES.items()]
+    nonfinite = max([4] + [v[0] + 1 for _, v in members])
+    return members + [("nonfinite_signal", (nonfinite, "the simulated signal is not finite",
+                                            "tighten [dynamics] rtol/atol; check the structural "
+                                            "parameters"))]
+
+
+#: per-item result codes of a data set (``/labels`` field ``result``): the simulation codes of
+#: bearingsim.dynamics, plus ``nonfinite_signal``.  Members carry ``message`` and ``hint``.
+DatasetResult = ResultCode("DatasetResult", _result_members(), module=__name__)
 
 
 def result_messages() -> dict:
-    """Result code -> message (the codes of bearingsim.dynamics, plus 4)."""
-    from .dynamics import RESULT_MESSAGES as m
-    return {**m, RESULT_NONFINITE: "the simulated signal is not finite"}
+    """Result code -> message of every :data:`DatasetResult` member (stored in the file)."""
+    return {int(m): m.message for m in DatasetResult}
 
 
 @dataclass(frozen=True)
@@ -76,10 +100,11 @@ class DatasetSummary:
 def _settings(case) -> dict:
     ds = case.data.get("dataset")
     if ds is None:
-        raise ValueError(f"{case.source}: the case has no [dataset] section")
+        raise InputError(f"{case.source}: no [dataset] section: add one with at least count = N "
+                         "(see the case reference)")
     missing = [k for k in _RANGES if k not in ds]
     if missing:  # the case reader reports these; guard for hand-built cases
-        raise ValueError(f"{case.source}: [dataset] lacks " + ", ".join(f"dataset.{k}" for k in missing))
+        raise InputError(f"{case.source}: [dataset] lacks " + ", ".join(f"dataset.{k}" for k in missing))
     return ds
 
 
@@ -160,7 +185,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     o = case.data["operation"]
     # simulate_batch uses the default raceway control/centrifugal/gyroscopic flags of Operation
     if not (o["centrifugal"] and o["gyroscopic"]):
-        raise ValueError(f"{case.source}: [dataset] needs operation.centrifugal and "
+        raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
                          "operation.gyroscopic true (the batch simulation always includes them)")
     profile = case.data.get("defect", {}).get("profile", "rectangular")
     params = DynamicsParameters.from_settings(d)
@@ -222,7 +247,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
                     code = np.asarray(res.result)[:m].astype(np.int32)
                     bpfo = np.asarray(res.bpfo_Hz)[:m]
                     finite = np.all(np.isfinite(a), axis=1)
-                    code = np.where((code == 0) & ~finite, RESULT_NONFINITE, code)
+                    code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
                     ok = code == 0
                     a = np.where(ok[:, None], a, 0.0).astype(np.float32)
                     bpfo = np.where(np.isfinite(bpfo), bpfo, 0.0)

@@ -15,12 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from .errors import BearingsimError, OutputError
 
 RAD2DEG = 180.0 / np.pi
 
 
-class NonFiniteOutputError(ValueError):
-    """A result about to be written contains NaN or infinity."""
+class NonFiniteOutputError(OutputError):
+    """A result about to be written contains NaN or infinity (exit code 4)."""
 
 
 def _check_finite(name, arr):
@@ -32,20 +33,26 @@ def _check_finite(name, arr):
 
 @contextmanager
 def atomic_path(path):
-    """Yield a temporary path next to ``path``; move it into place only if the block succeeds."""
+    """Yield a temporary path next to ``path``; move it into place only if the block succeeds.
+
+    A failure of the file system (``OSError``) is raised as :class:`~bearingsim.errors.OutputError`
+    naming ``path``; nothing is left behind either way."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes it owner-only; results are ordinary files
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes it owner-only; results are ordinary files
         yield Path(tmp)
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
+    except BaseException as e:
+        if tmp is not None and os.path.exists(tmp):
             os.remove(tmp)
+        if isinstance(e, OSError) and not isinstance(e, BearingsimError):
+            raise OutputError(f"cannot write {path}: {e.strerror or e}") from e
         raise
 
 

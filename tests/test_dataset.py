@@ -182,6 +182,6 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch, capsys):
     with h5py.File(tmp_path / "f.h5", "r") as f:
         x, L = f["signals"][()], f["labels"][()]
     bad = L["result"] != 0
-    assert bad.sum() == 4 and set(L["result"][bad]) == {1, dsm.RESULT_NONFINITE}
+    assert bad.sum() == 4 and set(L["result"][bad]) == {1, int(dsm.DatasetResult.nonfinite_signal)}
     assert np.all(x[bad] == 0) and np.all(x[~bad] == 1)
     assert np.all(np.isfinite(L["bpfo_Hz"])) and np.all(L["bpfo_Hz"] == 0)
