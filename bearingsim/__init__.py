@@ -25,12 +25,23 @@ from .kinematics import (  # noqa: E402
     DefectFrequencies,
 )
 from .defect import Spall, NO_SPALL, depth_profile  # noqa: E402
+from .errors import (  # noqa: E402
+    BearingsimError,
+    InputError,
+    NotConvergedError,
+    InvalidStateError,
+    OutputError,
+)
+from .balls import BallState, balls_at, reactions_from_balls  # noqa: E402
 from .jones import (  # noqa: E402
     JonesSolution,
-    RESULT_MESSAGES,
+    RESULTS,
+    OverloadWarning,
     solve,
+    solve_state,
     solve_batch,
     ring_reactions,
+    load_vector,
     Loads,
 )
 
@@ -53,8 +64,19 @@ __all__ = [
     "Spall",
     "NO_SPALL",
     "depth_profile",
+    "BearingsimError",
+    "InputError",
+    "NotConvergedError",
+    "InvalidStateError",
+    "OutputError",
+    "BallState",
+    "balls_at",
+    "reactions_from_balls",
     "JonesSolution",
-    "RESULT_MESSAGES",
+    "RESULTS",
+    "OverloadWarning",
+    "solve_state",
+    "load_vector",
     "solve",
     "solve_batch",
     "ring_reactions",

@@ -1,52 +1,102 @@
-"""Jones (1960) quasi-static model in Harris' form, with an optional outer-raceway spall
-(MODEL.md sections 4-5).
+"""Jones (1960) quasi-static model in Harris' form with raceway defects (MODEL.md sections 3-5):
+one flat Newton on all 2Z + 5 unknowns.
 
-Structure of the solve
-----------------------
-* Per ball (vmapped): given the inner-ring displacement ``q`` the ball centre (X1, X2) solves
-  its two equilibrium equations.  At omega = 0 this is the closed form (contacts collinear,
-  delta_i / delta_o = (K_o / K_i)^(2/3)); at speed a damped Newton on the 2x2 problem starts
-  from it.  The ball solve is wrapped in ``lax.custom_root`` so that derivatives with respect
-  to ``q`` (and to every bearing / spall parameter) come from the implicit function theorem:
-  this is the Schur complement of the 2Z+5 system on the 5 ring unknowns.
-* Ring (5 unknowns): Newton with the exact Jacobian of the load-displacement map R(q)
-  (``jax.jacfwd`` through the implicit ball solves) and a backtracking line search, first at
-  omega = 0 (the rigid-ring static model) from a start where every ball touches, then at the
-  operating speed (optionally in several speed steps).
-* The 5x5 bearing stiffness is dR/dq at the solution.
+Design
+------
+* Unknowns: the ring displacement q (5) and every ball centre (X1, X2) (Z x 2), plus, when a
+  defect is present, every ball's undropped centre (its orbital speed is the one the cage
+  carries a ball at when it loses inner contact over the defect, MODEL.md 5).
+* One Newton iteration evaluates every ball's residuals and loads on the ring together with
+  their Jacobian with respect to (X1, X2, A1, A2) (``jax.jacfwd`` of one ball's equations from
+  :mod:`bearingsim.balls`, vmapped over balls), eliminates the 2x2 ball blocks (Schur complement
+  on the 5 ring unknowns: one 5x5 solve) and back-substitutes the ball steps.  Steps are capped
+  (200 um on the ring, 2e-3 D on a ball) and a ball at speed is never left off its outer raceway.
+  A single ``lax.while_loop`` does Newton steps and backtracking (each pass evaluates one trial
+  point), so the model is traced once; under ``vmap`` it runs as a masked fixed-shape loop.
+* Start: the rigid-ring static solution (omega = 0; balls from the closed form, exact at rest),
+  from an axial shift where every ball touches; then the operating speed (``speed_steps``
+  stages).  Warm starts (a previous cage angle or load case) skip the static stage.
+* At the converged state a last Newton correction with frozen Jacobian makes the solution
+  implicitly differentiable (``jax.grad``/``jacfwd`` through :func:`solve_state` give the
+  implicit-function-theorem derivatives) and gives the stiffness dR/dq (the Schur complement).
+* Validity (never a silent wrong answer): a converged state is re-checked from its per-ball
+  output -- finite, no loaded contact with |alpha| >= 90 deg, every ball and the ring in
+  equilibrium, contact deformations <= 1 % of D and ring translations within the clearance
+  plus that -- and otherwise carries its own result code.  Contact pressures above 4.2 GPa
+  are a warning (ISO 76 static-capacity stress: permanent deformation ~1e-4 D starts there).
 
 Unknowns are scaled to micrometres (tilts as micrometres at the groove-centre radius R_i),
 residuals to kN (moments divided by R_i), so one tolerance fits every DOF.
-
-Balls out of contact: a ball with no contact at omega = 0 carries nothing and sits at the
-closed-form mid-gap position (its equations hold identically); at speed the start pushes it
-onto the outer raceway, where F_c keeps it.  The gyroscopic friction terms are those of
-MODEL.md for every ball.  A ball that has lost its inner contact over the spall is carried
-by the cage at the orbital speed of its undropped position (same q, no spall), see MODEL.md
-section 5.
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+import warnings
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 
-from .defect import NO_SPALL, Spall, depth_profile
-from .hertz import chebyshev_eval, hertz_contact, semi_axes, stiffness_curve
-from .kinematics import Operation, ball_kinematics
+from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, groove_centre_offsets,
+                    inverse2, lift_onto_outer, offset_jacobian, reaction_matrix,
+                    reactions_from_balls, static_ball_position)
+from .defect import Spall, depth_profile
+from .errors import InvalidStateError, NotConvergedError, ResultCode
+from .hertz import hertz_contact, semi_axes, stiffness_curve
+from .kinematics import Operation
 
-UM = 1e-6          # unknown scale (m)
-KN = 1e3           # residual scale (N)
+__all__ = [
+    "RESULTS",
+    "JonesSolution",
+    "NotConvergedError",
+    "InvalidStateError",
+    "OverloadWarning",
+    "load_vector",
+    "Loads",
+    "initial_displacement",
+    "ring_reactions",
+    "solve_state",
+    "solve",
+    "solve_batch",
+    "DEFORMATION_LIMIT",
+    "PRESSURE_WARNING",
+]
 
-RESULT_MESSAGES = {
-    0: "converged",
-    1: "maximum number of Newton iterations reached",
-    2: "non-finite value in the residual or Jacobian",
-    3: "line search could not reduce the residual (stagnated above tolerance)",
-}
+#: largest contact deformation a valid state may hold, as a fraction of the ball diameter D.
+#: Hertz theory is a small-strain, half-space theory; at 1 % of D the peak pressure is about
+#: twice the 4.2 GPa static-capacity stress and the steel has yielded.
+DEFORMATION_LIMIT = 0.01
+#: peak contact pressure (Pa) above which a state is flagged ``overloaded`` (a warning): the
+#: ISO 76 basic static load rating stress of ball bearings, where permanent deformation of
+#: ~1e-4 D begins.
+PRESSURE_WARNING = 4.2e9
+
+_LS_STEPS = 12
+_RING_CAP = 200.0          # um (or um at R_i) per Newton step
+_BALL_CAP = 2e-3           # x D per Newton step
+
+
+class RESULTS(ResultCode):
+    """Result codes of a quasi-static solve (``JonesSolution.result``)."""
+
+    successful = (0, "converged", "")
+    max_iterations = (1, "maximum number of Newton iterations reached",
+                      "raise maxit, or approach the operating point in more speed_steps")
+    nonfinite = (2, "non-finite value in the residual or Jacobian",
+                 "check the inputs (geometry, loads) for NaN or extreme values")
+    stagnated = (3, "line search could not reduce the residual (stagnated above tolerance)",
+                 "a single-row angular contact bearing needs axial load in its contact direction "
+                 "to carry radial load and moments; check the loads, or lower the speed")
+    inverted_contact = (4, "a loaded contact has its normal pointing out of its raceway "
+                        "(|alpha| >= 90 deg, MODEL.md section 3): a spurious root",
+                        "the loads cannot be carried with every contact pressing into its raceway; "
+                        "check the load directions and the defect depth")
+    equilibrium = (5, "a ball or the ring is not in equilibrium when recomputed from the "
+                   "per-ball output", "tighten rtol/atol, or report the case: this is a solver bug")
+    beyond_bounds = (6, "contact deformation beyond 1 % of the ball diameter, or ring displacement "
+                     "beyond the clearance: outside what Hertz theory and the steel can carry",
+                     "the loads exceed the bearing's capacity by far; check their units (N, N m)")
 
 
 def load_vector(axial=0.0, radial_x=0.0, radial_y=0.0, moment_x=0.0, moment_y=0.0):
@@ -58,231 +108,18 @@ def load_vector(axial=0.0, radial_x=0.0, radial_y=0.0, moment_x=0.0, moment_y=0.
 Loads = load_vector
 
 
-# ----------------------------------------------------------------------------------------
-# Per-ball geometry and equilibrium
-# ----------------------------------------------------------------------------------------
-def groove_centre_offsets(bearing, q, psi):
-    """(A1, A2): axial and radial distance from the outer to the inner groove-curvature centre."""
-    BD = bearing.A
-    a0 = bearing.free_contact_angle
-    dx, dy, dz, tx, ty = q[0], q[1], q[2], q[3], q[4]
-    A1 = BD * jnp.sin(a0) + dz + bearing.inner_groove_radius * (tx * jnp.sin(psi) - ty * jnp.cos(psi))
-    A2 = BD * jnp.cos(a0) + dx * jnp.cos(psi) + dy * jnp.sin(psi)
-    return A1, A2
+class OverloadWarning(UserWarning):
+    """Contact pressure above :data:`PRESSURE_WARNING`: valid for the model, not for the steel."""
 
 
-class BallState(NamedTuple):
-    X1: jnp.ndarray
-    X2: jnp.ndarray
-    alpha_i: jnp.ndarray
-    alpha_o: jnp.ndarray
-    delta_i: jnp.ndarray
-    delta_o: jnp.ndarray
-    Q_i: jnp.ndarray
-    Q_o: jnp.ndarray
-    K_i: jnp.ndarray
-    K_o: jnp.ndarray
-    Fc: jnp.ndarray
-    Mg: jnp.ndarray
-    omega_m: jnp.ndarray
-    beta: jnp.ndarray
-    G: jnp.ndarray          # axial force on the ball from the inner ring
-    H: jnp.ndarray          # radial force on the ball from the inner ring
-    moment: jnp.ndarray     # m_j = R_i G - lambda_i f_i M_g
-    r_axial: jnp.ndarray    # ball equilibrium residuals (N)
-    r_radial: jnp.ndarray
-
-
-def ball_state(bearing, op: Operation, x, A1, A2, H_def, curve, wm_undropped=None):
-    """Everything about one ball whose centre is at x = (X1, X2) (m) from the outer groove centre."""
-    D = bearing.ball_diameter
-    X1, X2 = x[0], x[1]
-    Lo = jnp.sqrt(X1 * X1 + X2 * X2)
-    ui, vi = A1 - X1, A2 - X2
-    Li = jnp.sqrt(ui * ui + vi * vi)
-    delta_o = Lo - (bearing.f_outer - 0.5) * D - H_def
-    delta_i = Li - (bearing.f_inner - 0.5) * D
-    alpha_o = jnp.arctan2(X1, X2)
-    alpha_i = jnp.arctan2(ui, vi)
-    K_i = chebyshev_eval(curve.inner, vi / Li)
-    K_o = chebyshev_eval(curve.outer, X2 / Lo)
-    Q_i = K_i * jnp.maximum(delta_i, 0.0) ** 1.5
-    Q_o = K_o * jnp.maximum(delta_o, 0.0) ** 1.5
-    kin = ball_kinematics(bearing, op, alpha_i, alpha_o)
-    wm, Fc, Mg = kin.orbital_speed, kin.centrifugal, kin.gyroscopic
-    if wm_undropped is not None:
-        # not driven by the inner ring over the spall: the cage carries it (MODEL.md 5)
-        carried = (delta_i <= 0.0) & (H_def > 0.0)
-        safe_wm = jnp.where(wm == 0.0, 1.0, wm)
-        scale = jnp.where(carried & (wm != 0.0), (wm_undropped / safe_wm) ** 2, 1.0)
-        wm = jnp.where(carried, wm_undropped, wm)
-        Fc, Mg = Fc * scale, Mg * scale
-    lam_i, lam_o = op.factors
-    # gyroscopic friction terms exactly as MODEL.md writes them (for every ball)
-    fi = lam_i * Mg / D
-    fo = lam_o * Mg / D
-    si, ci = jnp.sin(alpha_i), jnp.cos(alpha_i)
-    so, co = jnp.sin(alpha_o), jnp.cos(alpha_o)
-    G = Q_i * si + fi * ci
-    Hr = Q_i * ci - fi * si
-    r1 = G - Q_o * so - fo * co
-    r2 = Hr - Q_o * co + fo * so + Fc
-    moment = bearing.inner_groove_radius * G - bearing.f_inner * fi * D
-    return BallState(X1, X2, alpha_i, alpha_o, delta_i, delta_o, Q_i, Q_o, K_i, K_o, Fc, Mg,
-                     wm, kin.beta, G, Hr, moment, r1, r2)
-
-
-def _static_ball_position(bearing, op, A1, A2, H_def, curve):
-    """Closed-form ball centre at omega = 0 (collinear contacts); pushed onto the outer raceway
-    when the ball would float at speed.  Exact solution when omega = 0."""
-    D = bearing.ball_diameter
-    L = jnp.sqrt(A1 * A1 + A2 * A2)
-    alpha = jnp.arctan2(A1, A2)
-    d_tot = L - bearing.A - H_def
-    K_i = chebyshev_eval(curve.inner, A2 / L)
-    K_o = chebyshev_eval(curve.outer, A2 / L)
-    share_o = 1.0 / (1.0 + (K_o / K_i) ** (2.0 / 3.0))
-    d_o = jnp.where(d_tot > 0.0, d_tot * share_o, 0.5 * d_tot)
-    # at speed: at least the outer deflection that carries the ball's own centrifugal force
-    Fc = ball_kinematics(bearing, op, alpha, alpha).centrifugal
-    d_c = (Fc / K_o) ** (2.0 / 3.0)
-    d_o = jnp.where(Fc > 0.0, jnp.maximum(d_o, d_c), d_o)
-    Lo = (bearing.f_outer - 0.5) * D + H_def + d_o
-    return jnp.stack([Lo * jnp.sin(alpha), Lo * jnp.cos(alpha)]), d_c
-
-
-_BALL_MAXIT = 40
-
-
-def ball_newton_step(bearing, op, A1, A2, H_def, curve, wm_undropped, d_c):
-    """The damped Newton step of one ball's 2x2 equilibrium in micrometres, shared by the exact
-    solve (:func:`solve_ball`) and the fixed-step solver of the dynamics: ``(f, step)`` with
-    ``step(y) -> (y_new, |dy|_max, r)``.  The step is capped at ~ a contact deflection, and at
-    speed (``d_c > 0``) a ball never leaves its outer raceway (F_c would bring it back)."""
-    D = bearing.ball_diameter
-    cap = 2e-3 * D / UM          # step cap (um): ~ a contact deflection
-
-    def f(y):
-        st = ball_state(bearing, op, y * UM, A1, A2, H_def, curve, wm_undropped)
-        return jnp.stack([st.r_axial, st.r_radial]) / KN
-
-    def step(y):
-        J, r = jax.jacfwd(lambda v: (lambda rr: (rr, rr))(f(v)), has_aux=True)(y)
-        mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
-        dy = -jnp.linalg.solve(J + mu * jnp.eye(2), r)
-        n = jnp.max(jnp.abs(dy))
-        dy = jnp.where(n > cap, dy * (cap / n), dy)
-        dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, 0.0)
-        y_new = y + dy
-        Lo = jnp.sqrt(y_new[0] ** 2 + y_new[1] ** 2) * UM
-        d_o = Lo - (bearing.f_outer - 0.5) * D - H_def
-        lift = (d_c > 0.0) & (d_o <= 0.0)
-        target = ((bearing.f_outer - 0.5) * D + H_def + 0.5 * d_c) / jnp.where(Lo > 0, Lo, 1.0)
-        return jnp.where(lift, y_new * target, y_new), n, r
-
-    return f, step
-
-
-def solve_ball(bearing, op, A1, A2, H_def, curve, wm_undropped=None, x_init=None):
-    """Ball-centre position (m) in equilibrium for groove-centre offsets (A1, A2) and spall depth.
-
-    Starts from the omega = 0 closed form, or from ``x_init`` (m; a nearby solution, e.g. the
-    previous Newton iterate) where that keeps the ball on its outer raceway.  Differentiable
-    (implicit function theorem via ``lax.custom_root``; the start does not enter derivatives).
-    """
-    D = bearing.ball_diameter
-    x0, d_c = _static_ball_position(bearing, op, A1, A2, H_def, curve)
-    if x_init is not None:
-        Lo = jnp.sqrt(x_init[0] ** 2 + x_init[1] ** 2)
-        usable = jnp.all(jnp.isfinite(x_init)) & (Lo > 0.0) & (
-            (d_c <= 0.0) | (Lo - (bearing.f_outer - 0.5) * D - H_def > 0.0))
-        x0 = jnp.where(usable, lax.stop_gradient(x_init), x0)
-    f, step = ball_newton_step(bearing, op, A1, A2, H_def, curve, wm_undropped, d_c)
-
-    def newton(f, y0):
-        scale = jnp.maximum(jnp.max(jnp.abs(y0)), 1.0)
-
-        def cond(c):
-            y, it, done = c
-            return (~done) & (it < _BALL_MAXIT)
-
-        def body(c):
-            y, it, _ = c
-            y_new, n, r = step(y)
-            done = (n <= 1e-10 * scale) | (jnp.max(jnp.abs(r)) <= 1e-15) | ~jnp.isfinite(n)
-            return y_new, it + 1, done
-
-        y, _, _ = lax.while_loop(cond, body, (y0, jnp.int32(0), jnp.bool_(False)))
-        return y
-
-    def tangent_solve(g, y):
-        J = jax.jacfwd(g)(y)
-        mu = 1e-13 * (jnp.max(jnp.abs(J)) + 1e-30)
-        return jnp.linalg.solve(J + mu * jnp.eye(2), y)
-
-    y = lax.custom_root(f, x0 / UM, newton, tangent_solve)
-    return y * UM
-
-
-def balls_at(bearing, op, q, psi, spall: Spall | None, curve, x_init=None):
-    """Per-ball equilibrium states (a BallState of (Z,) arrays) for ring displacement q."""
-    A1, A2 = groove_centre_offsets(bearing, q, psi)
-    if spall is None:
-        H_def = jnp.zeros_like(psi)
-    else:
-        H_def = depth_profile(bearing, spall, psi)
-
-    def one(a1, a2, h, xi):
-        if spall is None:
-            x = solve_ball(bearing, op, a1, a2, h, curve, None, xi)
-            return ball_state(bearing, op, x, a1, a2, h, curve)
-
-        # two passes through one traced ball solve: first without the spall (the undropped
-        # position gives the orbital speed of a ball the cage carries), then with it
-        def passage(wm0, hh):
-            start = xi
-            if xi is not None:   # the warm start is the dropped position: lift it by h - hh
-                Lo = jnp.sqrt(xi[0] ** 2 + xi[1] ** 2)
-                start = xi * (Lo - (h - hh)) / jnp.where(Lo > 0.0, Lo, 1.0)
-            x = solve_ball(bearing, op, a1, a2, hh, curve, wm0, start)
-            st = ball_state(bearing, op, x, a1, a2, hh, curve, wm0)
-            return st.omega_m, st
-
-        _, sts = lax.scan(passage, jnp.zeros_like(a1), jnp.stack([jnp.zeros_like(h), h]))
-        return jax.tree_util.tree_map(lambda a: a[1], sts)
-
-    if x_init is None:
-        return jax.vmap(lambda a1, a2, h: one(a1, a2, h, None))(A1, A2, H_def), H_def
-    return jax.vmap(one)(A1, A2, H_def, x_init), H_def
-
-
-def _reactions_from_balls(st: BallState, psi):
-    c, s = jnp.cos(psi), jnp.sin(psi)
-    return jnp.stack([jnp.sum(st.H * c), jnp.sum(st.H * s), jnp.sum(st.G),
-                      jnp.sum(st.moment * s), -jnp.sum(st.moment * c)])
-
-
-def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | None = None, hertz_method="exact",
-                   curve=None):
-    """Load-displacement map: the loads [Fx, Fy, Fz, Mx, My] (N, N m) the bearing carries at
-    inner-ring displacement q = [dx, dy, dz, theta_x, theta_y] (m, rad), balls in equilibrium."""
-    psi = bearing.ball_azimuths(cage_angle)
-    curve = stiffness_curve(bearing, hertz_method) if curve is None else curve
-    st, _ = balls_at(bearing, op, q, psi, spall, curve)
-    return _reactions_from_balls(st, psi)
-
-
-# ----------------------------------------------------------------------------------------
-# Ring Newton
-# ----------------------------------------------------------------------------------------
 def _scales(bearing):
     Ri = bearing.inner_groove_radius
-    qs = jnp.array([UM, UM, UM, 1.0, 1.0]) * jnp.array([1.0, 1.0, 1.0, UM / Ri, UM / Ri])
-    rs = jnp.array([KN, KN, KN, KN * Ri, KN * Ri])
+    qs = jnp.stack([UM, UM, UM, UM / Ri, UM / Ri])
+    rs = jnp.stack([KN, KN, KN, KN * Ri, KN * Ri])
     return qs, rs
 
 
-def _initial_displacement(bearing, loads, hertz_method):
+def initial_displacement(bearing, loads, curve):
     """A start where every ball touches: an axial shift giving each ball the deflection that
     would carry the whole load (no contact at all has a zero Jacobian)."""
     a0 = bearing.free_contact_angle
@@ -290,90 +127,196 @@ def _initial_displacement(bearing, loads, hertz_method):
     Ri = bearing.inner_groove_radius
     Fz = loads[2]
     Fmag = jnp.abs(Fz) + jnp.hypot(loads[0], loads[1]) + 2.0 * jnp.hypot(loads[3], loads[4]) / Ri
-    Ki = hertz_contact(bearing, a0, True, hertz_method).K
-    Ko = hertz_contact(bearing, a0, False, hertz_method).K
+    from .hertz import chebyshev_eval
+    c0 = jnp.cos(a0)
+    Ki, Ko = chebyshev_eval(curve.inner, c0), chebyshev_eval(curve.outer, c0)
     Kn = (Ki ** (-2.0 / 3.0) + Ko ** (-2.0 / 3.0)) ** (-1.5)
     d_n = (Fmag / (bearing.n_balls * Kn)) ** (2.0 / 3.0)
     sgn = jnp.where(Fz < 0.0, -1.0, 1.0)
-    dz = sgn * jnp.sqrt(jnp.maximum((BD + d_n) ** 2 - (BD * jnp.cos(a0)) ** 2, 0.0)) - BD * jnp.sin(a0)
+    dz = sgn * jnp.sqrt(jnp.maximum((BD + d_n) ** 2 - (BD * c0) ** 2, 0.0)) - BD * jnp.sin(a0)
     dz = jnp.where(Fmag > 0.0, dz, 0.0)
     return jnp.array([0.0, 0.0, 1.0, 0.0, 0.0]) * dz
 
 
-_LS_STEPS = 12
+def _defect_depths(bearing, spall, psi):
+    """(H_outer, H_inner) under each ball, or (None, None) when healthy."""
+    if spall is None:
+        return None, None
+    return depth_profile(bearing, spall, psi), None
 
 
-def _ring_newton(RJ, q0, F, qs, rs, maxit, rtol, atol, x_init_shape, ball_positions):
-    """Damped Newton on R(q) = F in scaled variables.
+# ----------------------------------------------------------------------------- Newton system
+class _Problem(eqx.Module):
+    """Everything fixed during one solve (arrays; the defect depths are per ball)."""
 
-    ``RJ(q, x_init) -> (J, (R, aux))`` evaluates the load-displacement map, its Jacobian and
-    the ball states in one pass (ball solves warm-started from ``x_init``, the accepted iterate's
-    ball positions ``ball_positions(aux)``; NaN = use the closed-form start).  A single loop does both Newton steps and backtracking: each pass
-    evaluates one trial point; an accepted trial brings the Jacobian for the next step (one
-    trace of the model, so compile time stays small).
-    Returns (q, J, aux, result, iterations, residual max-norm in N).
-    """
-    Fn = F / rs
-    tol = atol / KN + rtol * jnp.max(jnp.abs(Fn))
-    cap = 200.0   # um (or um at R_i) per Newton step
+    bearing: object
+    op: Operation
+    curve: object
+    psi: jnp.ndarray
+    H_outer: jnp.ndarray
+    H_inner: jnp.ndarray
+    Fn: jnp.ndarray                  # scaled applied loads
+    qs: jnp.ndarray
+    rs: jnp.ndarray
+    defect: bool = eqx.field(static=True)
 
-    def evaluate(z, x_init):
-        J, (R, aux) = RJ(z * qs, x_init)
-        return R / rs - Fn, J * (qs[None, :] / rs[:, None]), J, aux
 
-    def direction(Js, r):
-        mu = 1e-13 * (jnp.max(jnp.abs(Js)) + 1e-30)
-        dz = -jnp.linalg.solve(Js + mu * jnp.eye(5), r)
-        n = jnp.max(jnp.abs(dz))
-        return jnp.where(n > cap, dz * (cap / jnp.where(n > 0, n, 1.0)), dz)
+def _per_ball(pb: _Problem, Y, a, ho, hi, ws, jac):
+    v = jnp.concatenate([Y, a])
+    if not jac:
+        out, wm = ball_equations(pb.bearing, pb.op, pb.curve, v, ho, hi, ws)
+        return out, None, wm
 
-    def cond(c):
-        return c["code"] < 0
+    def f(v):
+        out, wm = ball_equations(pb.bearing, pb.op, pb.curve, v, ho, hi, ws)
+        return out, (out, wm)
+
+    J, (out, wm) = jax.jacfwd(f, has_aux=True)(v)
+    return out, J, wm
+
+
+def _evaluate(pb: _Problem, qz, Y, Yu, jac=True):
+    """Residuals (and, with ``jac``, the Jacobian blocks) at (q, balls): a dict of pieces."""
+    q = qz * pb.qs
+    A1, A2 = groove_centre_offsets(pb.bearing, q, pb.psi)
+    a = jnp.stack([A1, A2], axis=-1) / UM
+    ws = None
+    piece = {}
+    if pb.defect:
+        out_u, J_u, wm_u = jax.vmap(lambda y, aa: _per_ball(pb, y, aa, 0.0, 0.0, None, jac))(Yu, a)
+        ws = lax.stop_gradient(wm_u)
+        piece["rbu"] = out_u[:, :2]
+        if jac:
+            piece.update(Jbbu=J_u[:, :2, :2], Jbau=J_u[:, :2, 2:])
+    out, J, _ = jax.vmap(lambda y, aa, ho, hi, w: _per_ball(pb, y, aa, ho, hi, w, jac),
+                         in_axes=(0, 0, 0, 0, None if ws is None else 0))(Y, a, pb.H_outer,
+                                                                           pb.H_inner, ws)
+    T = reaction_matrix(pb.psi)                                   # (Z, 5, 3)
+    piece["rq"] = jnp.einsum("zij,zj->i", T, out[:, 2:]) - pb.Fn
+    piece["rb"] = out[:, :2]
+    if jac:
+        piece.update(Jbb=J[:, :2, :2], Jba=J[:, :2, 2:], Cx=J[:, 2:, :2], Ca=J[:, 2:, 2:])
+    return piece
+
+
+_JAC_KEYS = ("Jbb", "Jba", "Cx", "Ca", "Jbbu", "Jbau")
+
+
+def _merit(piece):
+    m = jnp.maximum(jnp.max(jnp.abs(piece["rq"])), jnp.max(jnp.abs(piece["rb"])))
+    if "rbu" in piece:
+        m = jnp.maximum(m, jnp.max(jnp.abs(piece["rbu"])))
+    return m
+
+
+def _direction(pb: _Problem, piece, jac=None):
+    """Newton step (dqz, dY, dYu) with the ball blocks eliminated, and the scaled stiffness S.
+    ``jac``: Jacobian blocks to use instead of the piece's own (frozen, for the implicit
+    derivative: then the derivative flows through the residuals only)."""
+    jac = piece if jac is None else jac
+    Jbb, Jba, Cx, Ca = (jac[k] for k in ("Jbb", "Jba", "Cx", "Ca"))
+    T = reaction_matrix(pb.psi)                                   # (Z, 5, 3)
+    P = offset_jacobian(pb.bearing, pb.psi) * (pb.qs / UM)        # (Z, 2, 5) dA(um)/dqz
+    inv = inverse2(Jbb)                                           # (Z, 2, 2)
+    M = Cx @ inv                                                  # (Z, 3, 2)
+    S = jnp.einsum("zij,zjk,zkl->il", T, Ca - M @ Jba, P)         # (5, 5) scaled dR/dq
+    rhs = piece["rq"] - jnp.einsum("zij,zjk,zk->i", T, M, piece["rb"])
+    mu = 1e-13 * (jnp.max(jnp.abs(S)) + 1e-30)
+    dq = -jnp.linalg.solve(S + mu * jnp.eye(5), rhs)
+    dA = jnp.einsum("zij,j->zi", P, dq)
+    dY = -jnp.einsum("zij,zj->zi", inv, piece["rb"] + jnp.einsum("zij,zj->zi", Jba, dA))
+    dYu = None
+    if "rbu" in piece:
+        invu = inverse2(jac["Jbbu"])
+        dYu = -jnp.einsum("zij,zj->zi", invu,
+                          piece["rbu"] + jnp.einsum("zij,zj->zi", jac["Jbau"], dA))
+    return dq, dY, dYu, S
+
+
+def _cap(d, cap):
+    n = jnp.max(jnp.abs(d), axis=-1, keepdims=True)
+    d = jnp.where(n > cap, d * (cap / jnp.where(n > 0, n, 1.0)), d)
+    return jnp.where(jnp.isfinite(d), d, 0.0)
+
+
+def _closed_form_balls(pb: _Problem, qz, defect_free=False):
+    """Closed-form (omega = 0) ball centres (um) and the outer deflection that carries each
+    ball's centrifugal force (m)."""
+    A1, A2 = groove_centre_offsets(pb.bearing, qz * pb.qs, pb.psi)
+    Ho = jnp.zeros_like(pb.psi) if defect_free else pb.H_outer
+    Hi = jnp.zeros_like(pb.psi) if defect_free else pb.H_inner
+    x0, d_c = jax.vmap(lambda a1, a2, ho, hi: static_ball_position(
+        pb.bearing, pb.op, a1, a2, pb.curve, ho, hi))(A1, A2, Ho, Hi)
+    return x0 / UM, d_c
+
+
+def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
+    """Damped Newton from (qz0, Y0, Yu0): one while loop whose every pass evaluates one trial
+    point (the first pass: the start); an accepted trial brings the next direction.
+    Returns (qz, Y, Yu, Jacobian blocks at the accepted point, code, iterations)."""
+    bearing = pb.bearing
+    ball_cap = _BALL_CAP * bearing.ball_diameter / UM
+    defect = pb.defect
+
+    def direction(piece):
+        dq, dY, dYu, _ = _direction(pb, piece)
+        # length of the full Newton step (scaled um): the natural-monotonicity measure
+        sn = jnp.maximum(jnp.max(jnp.abs(dq)), jnp.max(jnp.abs(dY)))
+        if dYu is not None:
+            sn = jnp.maximum(sn, jnp.max(jnp.abs(dYu)))
+        return _cap(dq, _RING_CAP), _cap(dY, ball_cap), (
+            None if dYu is None else _cap(dYu, ball_cap)), sn
 
     def body(c):
-        zt = c["z"] + c["t"] * c["dz"]
         first = c["it"] < 0
-        rt, Jst, Jt, auxt = evaluate(zt, jnp.where(first, jnp.nan, ball_positions(c["aux"])))
-        rn = jnp.max(jnp.abs(rt))
-        r0 = jnp.max(jnp.abs(c["r"]))
-        finite = jnp.isfinite(rn) & jnp.all(jnp.isfinite(Jst))
-        ok = first | (finite & (rn <= (1.0 - 1e-4 * c["t"]) * r0))
+        t = c["t"]
+        qz = c["qz"] + t * c["dq"]
+        Y = lift_onto_outer(bearing, c["Y"] + t * c["dY"], d_c, pb.H_outer)
+        Yu = lift_onto_outer(bearing, c["Yu"] + t * c["dYu"], d_cu, 0.0) if defect else None
+        piece = _evaluate(pb, qz, Y, Yu)
+        m = _merit(piece)
+        dq, dY, dYu, sn = direction(piece)
+        finite = jnp.isfinite(m) & jnp.isfinite(sn)
+        # accept when the residual or the Newton step (natural monotonicity, Deuflhard) shrinks:
+        # the residual alone mixes ball and ring scales and rejects good full steps
+        ok = first | (finite & ((m <= (1.0 - 1e-4 * t) * c["m"]) | (sn <= (1.0 - 0.25 * t) * c["sn"])))
         sel = lambda new, old: jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, old)
-        z, r, Js, J, aux = sel((zt, rt, Jst, Jt, auxt), (c["z"], c["r"], c["Js"], c["J"], c["aux"]))
-        it = jnp.where(ok, c["it"] + 1, c["it"])
-        ls = jnp.where(ok, 0, c["ls"] + 1)
-        rnow = jnp.max(jnp.abs(r))
-        conv = rnow <= tol
-        # at the round-off floor a failed line search with a tiny residual is convergence
-        stalled = ls >= _LS_STEPS
+        jac = {k: piece[k] for k in _JAC_KEYS if k in piece}
+        new = dict(qz=qz, Y=Y, dq=dq, dY=dY, m=m, sn=sn, jac=jac)
+        if defect:
+            new.update(Yu=Yu, dYu=dYu)
+        out = sel(new, {k: c[k] for k in new})
+        out.update(t=jnp.where(ok, 1.0, 0.5 * t), it=jnp.where(ok, c["it"] + 1, c["it"]),
+                   ls=jnp.where(ok, 0, c["ls"] + 1))
+        conv = out["m"] <= tol
+        stalled = out["ls"] >= _LS_STEPS
         code = jnp.where(first & ~finite, 2,
-               jnp.where(conv | (stalled & (rnow <= 1e3 * tol)), 0,
-               jnp.where(stalled, 3, jnp.where(ok & (it >= maxit), 1, -1))))
-        dz = jnp.where(ok, direction(Js, r), c["dz"])
-        t = jnp.where(ok, 1.0, 0.5 * c["t"])
-        return dict(z=z, r=r, Js=Js, J=J, aux=aux, dz=dz, t=t, it=it, ls=ls,
-                    code=code.astype(jnp.int32))
+               jnp.where(conv | (stalled & (out["m"] <= 1e3 * tol)), 0,
+               jnp.where(stalled, 3, jnp.where(out["it"] >= maxit, 1, -1))))
+        out["code"] = code.astype(jnp.int32)
+        if not defect:
+            out.update(Yu=c["Yu"], dYu=c["dYu"])
+        return out
 
-    z0 = q0 / qs
-    # shapes of the evaluation's outputs, without tracing the model a second time
-    x_shape = jax.ShapeDtypeStruct(x_init_shape, jnp.float64)
-    shapes = jax.eval_shape(evaluate, z0, x_shape)
-    zeros = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
-    init = dict(z=z0, r=zeros[0], Js=zeros[1], J=zeros[2], aux=zeros[3], dz=jnp.zeros(5),
-                t=jnp.float64(0.0), it=jnp.int32(-1), ls=jnp.int32(0), code=jnp.int32(-1))
-    c = lax.while_loop(cond, body, init)
-    return c["z"] * qs, c["J"], c["aux"], c["code"], c["it"], jnp.max(jnp.abs(c["r"])) * KN
+    zeros = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype),
+                                   jax.eval_shape(lambda: _evaluate(pb, qz0, Y0, Yu0)))
+    init = dict(qz=qz0, Y=Y0, Yu=Y0 if Yu0 is None else Yu0, dq=jnp.zeros_like(qz0),
+                dY=jnp.zeros_like(Y0), dYu=jnp.zeros_like(Y0), m=jnp.float64(jnp.inf),
+                sn=jnp.float64(jnp.inf), t=jnp.float64(1.0), it=jnp.int32(-1), ls=jnp.int32(0),
+                code=jnp.int32(-1), jac={k: zeros[k] for k in _JAC_KEYS if k in zeros})
+    c = lax.while_loop(lambda c: c["code"] < 0, body, init)
+    return c["qz"], c["Y"], c["Yu"], c["jac"], c["code"], c["it"]
 
 
-# ----------------------------------------------------------------------------------------
-# Public solve
-# ----------------------------------------------------------------------------------------
+# -------------------------------------------------------------------------------- solution
 class JonesSolution(eqx.Module):
     """Quasi-static solution.  Arrays are SI (m, rad, N, N m, rad/s); per-ball arrays are (Z,)
-    (with a leading batch axis after ``solve_batch``).
+    (with a leading batch axis after ``solve_batch`` or a sweep).
 
-    ``result`` is 0 when converged (see ``RESULT_MESSAGES``); ``residual_norm`` is the max-norm
-    of the ring equilibrium residual in N (moments divided by R_i).
+    ``result`` is a :class:`RESULTS` code (0 = converged and valid); ``residual_norm`` is the
+    max-norm of the equilibrium residual in N (moments divided by R_i), balls included.
+    ``stiffness`` is dR/dq (5, 5): rows the loads [Fx, Fy, Fz, Mx, My], columns the ring
+    displacements [x, y, axial, tilt_x, tilt_y] (N/m, N/rad, N m/m, N m/rad).
     """
 
     displacement: jnp.ndarray       # q = [dx, dy, dz, theta_x, theta_y]
@@ -405,10 +348,13 @@ class JonesSolution(eqx.Module):
     b_inner: jnp.ndarray
     a_outer: jnp.ndarray
     b_outer: jnp.ndarray
-    stiffness: jnp.ndarray          # dR/dq (5, 5): N/m, N/rad, N m/m, N m/rad
+    stiffness: jnp.ndarray
+    ball_position: jnp.ndarray      # (Z, 2) ball centres (X1, X2) from the outer groove centre (m)
+    undropped_position: jnp.ndarray  # (Z, 2) the same without the defect (warm starts)
 
     @property
     def converged(self):
+        """True where the state converged and passed every validity check."""
         return self.result == 0
 
     @property
@@ -416,103 +362,235 @@ class JonesSolution(eqx.Module):
         """Cage speed omega_c (rad/s): the mean of the balls' orbital speeds."""
         return jnp.mean(self.orbital_speed, axis=-1)
 
+    @property
+    def max_pressure(self):
+        """Largest Hertz peak pressure over both contacts of every ball (Pa)."""
+        return jnp.maximum(jnp.max(self.p_max_inner, axis=-1), jnp.max(self.p_max_outer, axis=-1))
+
+    @property
+    def overloaded(self):
+        """True where a contact pressure exceeds :data:`PRESSURE_WARNING` (a warning)."""
+        return self.max_pressure > PRESSURE_WARNING
+
     def message(self):
-        import numpy as np
+        """One message per item (a list, also for a single solve)."""
         codes = np.atleast_1d(np.asarray(self.result))
-        return [RESULT_MESSAGES.get(int(c), f"unknown result {int(c)}") for c in codes]
+        return [RESULTS.of(c).message for c in codes]
 
 
-def _solve(bearing, op, loads, cage_angle, spall, q0, speed_steps, maxit, rtol, atol, hertz_method):
+def _validity(bearing, op, st: BallState, psi, q, F, H_outer, rtol):
+    """Result code of a converged state, re-checked from its per-ball output (MODEL.md 3-4)."""
+    D = bearing.ball_diameter
+    lam_i, lam_o = op.factors
+    si, ci = jnp.sin(st.alpha_inner), jnp.cos(st.alpha_inner)
+    so, co = jnp.sin(st.alpha_outer), jnp.cos(st.alpha_outer)
+    fi, fo = lam_i * st.gyroscopic_moment / D, lam_o * st.gyroscopic_moment / D
+    G = st.Q_inner * si + fi * ci
+    H = st.Q_inner * ci - fi * si
+    r1 = G - st.Q_outer * so - fo * co
+    r2 = H - st.Q_outer * co + fo * so + st.centrifugal
+    m = bearing.inner_groove_radius * G - bearing.f_inner * fi * D
+    c, s = jnp.cos(psi), jnp.sin(psi)
+    R = jnp.stack([jnp.sum(H * c), jnp.sum(H * s), jnp.sum(G), jnp.sum(m * s), -jnp.sum(m * c)])
+    Ri = bearing.inner_groove_radius
+    w = jnp.stack([1.0, 1.0, 1.0, 1.0 / Ri, 1.0 / Ri])
+    scale = jnp.maximum(jnp.max(jnp.abs(F * w)),
+                        jnp.max(jnp.stack([jnp.max(st.Q_inner), jnp.max(st.Q_outer),
+                                           jnp.max(jnp.abs(st.centrifugal))]))) + 1.0
+    tol = jnp.maximum(1e-7, 100.0 * rtol) * scale
+    ball_bad = jnp.max(jnp.maximum(jnp.abs(r1), jnp.abs(r2))) > tol
+    ring_bad = jnp.max(jnp.abs((R - F) * w)) > tol
+    inverted = jnp.any(((st.Q_inner > 0.0) & (ci <= 0.0)) | ((st.Q_outer > 0.0) & (co <= 0.0)))
+    d_lim = DEFORMATION_LIMIT * D
+    deform = jnp.maximum(jnp.where(st.Q_inner > 0.0, st.delta_inner, 0.0),
+                         jnp.where(st.Q_outer > 0.0, st.delta_outer, 0.0))
+    room = bearing.A + jnp.max(H_outer) + 2.0 * d_lim
+    ring = jnp.maximum(jnp.hypot(q[0], q[1]), jnp.abs(q[2]))
+    ring = jnp.maximum(ring, 0.5 * bearing.pitch_diameter * jnp.hypot(q[3], q[4]))
+    bounds = (jnp.max(deform) > d_lim) | (ring > room)
+    finite = jnp.all(jnp.isfinite(q)) & jnp.all(jnp.isfinite(st.Q_inner)) & jnp.all(
+        jnp.isfinite(st.Q_outer)) & jnp.all(jnp.isfinite(st.alpha_inner)) & jnp.all(
+        jnp.isfinite(st.alpha_outer))
+    return jnp.where(~finite, RESULTS.nonfinite, jnp.where(
+        inverted, RESULTS.inverted_contact, jnp.where(
+            bounds, RESULTS.beyond_bounds, jnp.where(
+                ball_bad | ring_bad, RESULTS.equilibrium, RESULTS.successful)))).astype(jnp.int32)
+
+
+def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None,
+                q0=None, x0=None, xu0=None, speed_steps: int = 1, maxit=60, rtol=1e-11, atol=1e-9,
+                hertz_method: str = "exact", curve=None) -> JonesSolution:
+    """The quasi-static state as a pure JAX function (jit/vmap/grad; never raises).
+
+    Cold start (``q0=None``): the rigid-ring static solution (omega = 0) from an axial shift,
+    then the operating speed in ``speed_steps`` stages.  Warm start: ``q0`` (and optionally the
+    ball centres ``x0`` and undropped centres ``xu0``, (Z, 2) m) at the full speed.
+    """
+    F = jnp.asarray(loads, dtype=jnp.float64)
+    cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
+    curve = stiffness_curve(bearing, hertz_method) if curve is None else curve
     qs, rs = _scales(bearing)
     psi = bearing.ball_azimuths(cage_angle)
-    F = jnp.asarray(loads, dtype=jnp.float64)
-    curve = stiffness_curve(bearing, hertz_method)
+    Ho, Hi = _defect_depths(bearing, spall, psi)
+    defect = Ho is not None or Hi is not None
+    Ho = jnp.zeros_like(psi) if Ho is None else Ho
+    Hi = jnp.zeros_like(psi) if Hi is None else Hi
+    Fn = F / rs
+    tol = jnp.asarray(atol, jnp.float64) / KN + jnp.asarray(rtol, jnp.float64) * jnp.max(jnp.abs(Fn))
+
+    def problem(frac):
+        o = eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
+        return _Problem(bearing, o, curve, psi, Ho, Hi, Fn, qs, rs, defect)
 
     if q0 is None:
-        q0 = _initial_displacement(bearing, F, hertz_method)
+        qz = initial_displacement(bearing, F, curve) / qs
         fracs = [0.0] + [k / speed_steps for k in range(1, speed_steps + 1)]
+        Y = Yu = None
     else:
-        q0 = jnp.asarray(q0, dtype=jnp.float64)
+        qz = jnp.asarray(q0, jnp.float64) / qs
         fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
+        Y = None if x0 is None else jnp.asarray(x0, jnp.float64) / UM
+        Yu = None if xu0 is None else jnp.asarray(xu0, jnp.float64) / UM
 
-    def stage(q, frac):
-        o = eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
+    def stage(carry, frac):
+        qz, Y, Yu, _ = carry
+        pb = problem(frac)
+        Yc, d_c = _closed_form_balls(pb, qz)
+        Yuc, d_cu = _closed_form_balls(pb, qz, True)
+        # closed-form balls where no start is given (NaN); a start off the outer raceway at speed
+        # is lifted onto it
+        Y = lift_onto_outer(bearing, jnp.where(jnp.isfinite(Y), Y, Yc), d_c, pb.H_outer)
+        Yu = lift_onto_outer(bearing, jnp.where(jnp.isfinite(Yu), Yu, Yuc), d_cu, 0.0)
+        qz, Y, Yu, jac, code, it = _newton(pb, qz, Y, Yu if defect else None, d_c, d_cu, maxit, tol)
+        return (qz, Y, Yu, jac), (code, it)
 
-        def R_aux(qq, x_init):
-            st, H_def = balls_at(bearing, o, qq, psi, spall, curve, x_init)
-            R = _reactions_from_balls(st, psi)
-            return R, (R, (st, H_def))
+    nan = jnp.full((bearing.n_balls, 2), jnp.nan)
+    Y = nan if Y is None else Y
+    Yu = nan if Yu is None else Yu
+    pb = problem(1.0)
+    jac0 = jax.tree_util.tree_map(
+        lambda s_: jnp.zeros(s_.shape, s_.dtype),
+        {k: v for k, v in jax.eval_shape(lambda: _evaluate(pb, qz, Y, Yu if defect else None)).items()
+         if k in _JAC_KEYS})
+    (qz, Y, Yu, jac), (codes, its) = lax.scan(stage, (qz, Y, Yu, jac0), jnp.asarray(fracs))
+    code, total_it = codes[-1], jnp.sum(its)
 
-        RJ = jax.jacfwd(R_aux, has_aux=True)
-        q, J, aux, code, it, res = _ring_newton(
-            RJ, q, F, qs, rs, maxit, rtol, atol, (bearing.n_balls, 2),
-            lambda aux: jnp.stack([aux[0].X1, aux[0].X2], axis=-1))
-        return q, (J, aux, code, it, res)
+    # implicit differentiation: one Newton correction at the solution with the Jacobian of the
+    # last accepted iterate frozen; the derivative flows through the residuals only (IFT)
+    qz, Y, Yu, jac = lax.stop_gradient((qz, Y, Yu, jac))
+    piece = _evaluate(pb, qz, Y, Yu if defect else None, jac=False)
+    dq, dY, dYu, S = _direction(pb, piece, jac)
+    res = _merit(piece) * KN
+    qz, Y = qz + dq, Y + dY
+    Yu = Yu + dYu if defect else Y
+    q = qz * qs
+    K = S * rs[:, None] / qs[None, :]
 
-    # later stages start from the last iterate of the one before; the final stage decides
-    q, (Js, auxs, codes, its, ress) = lax.scan(stage, q0, jnp.asarray(fracs))
-    last = lambda a: a[-1]
-    K, (st, H_def), code, res = jax.tree_util.tree_map(last, (Js, auxs, codes, ress))
-    total_it = jnp.sum(its)
-    hi = hertz_contact(bearing, st.alpha_i, True, hertz_method)
-    ho = hertz_contact(bearing, st.alpha_o, False, hertz_method)
+    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    x = Y * UM
+    ws = None
+    if defect:
+        ws = jax.vmap(lambda xx, a1, a2: ball_state(bearing, op, xx, a1, a2, curve).orbital_speed)(
+            Yu * UM, A1, A2)
+    st = jax.vmap(lambda xx, a1, a2, ho, hi, w: ball_state(bearing, op, xx, a1, a2, curve, ho, hi, w),
+                  in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(x, A1, A2, Ho, Hi, ws)
+    hi_ = hertz_contact(bearing, st.alpha_inner, True, hertz_method)
+    ho_ = hertz_contact(bearing, st.alpha_outer, False, hertz_method)
     Ep = bearing.effective_modulus
-    a_i, b_i, p_i = semi_axes(hi, st.Q_i, Ep)
-    a_o, b_o, p_o = semi_axes(ho, st.Q_o, Ep)
-    finite = jnp.all(jnp.isfinite(q)) & jnp.all(jnp.isfinite(st.Q_i)) & jnp.all(jnp.isfinite(st.Q_o))
-    code = jnp.where(finite, code, 2)
-    return JonesSolution(q, F, code, total_it, res, jnp.asarray(cage_angle, jnp.float64), psi,
-                         st.alpha_i, st.alpha_o, st.Q_i, st.Q_o, st.delta_i, st.delta_o, st.Fc,
-                         st.Mg, st.omega_m, st.beta, H_def, st.G, st.H, st.moment, st.K_i, st.K_o,
-                         p_i, p_o, a_i, b_i, a_o, b_o, K)
+    a_i, b_i, p_i = semi_axes(hi_, st.Q_inner, Ep)
+    a_o, b_o, p_o = semi_axes(ho_, st.Q_outer, Ep)
+    valid = _validity(bearing, op, st, psi, q, F, Ho, rtol)
+    code = jnp.where(code == 0, valid, code).astype(jnp.int32)
+    return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
+                         st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
+                         st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
+                         st.ball_G, st.ball_H, st.ball_moment, st.K_inner, st.K_outer, p_i, p_o,
+                         a_i, b_i, a_o, b_o, K, x, Yu * UM)
 
 
-_solve_jit = eqx.filter_jit(_solve)
+def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | None = None, hertz_method="exact",
+                   curve=None):
+    """Load-displacement map: the loads [Fx, Fy, Fz, Mx, My] (N, N m) the bearing carries at
+    inner-ring displacement q = [dx, dy, dz, theta_x, theta_y] (m, rad), balls in equilibrium
+    (each iterated to convergence; differentiable)."""
+    psi = bearing.ball_azimuths(cage_angle)
+    curve = stiffness_curve(bearing, hertz_method) if curve is None else curve
+    Ho, Hi = _defect_depths(bearing, spall, psi)
+    st = balls_at(bearing, op, q, psi, curve, Ho, Hi)
+    return reactions_from_balls(st, psi)
 
 
-def _traced_tolerances(maxit, rtol, atol):
+# ------------------------------------------------------------------------------ entry points
+_solve_jit = eqx.filter_jit(solve_state)
+
+
+def _traced(maxit, rtol, atol):
     # arrays, not Python scalars: changing a tolerance must not recompile
     return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
 
 
-class NotConvergedError(RuntimeError):
-    """A quasi-static solve did not converge."""
+def raise_for(sol: JonesSolution, what: str = "Jones solve"):
+    """Raise :class:`NotConvergedError` / :class:`InvalidStateError` for a failed solution
+    (single or batched: the first failed item is described, the count is given)."""
+    codes = np.atleast_1d(np.asarray(sol.result))
+    bad = np.flatnonzero(codes != 0)
+    if not bad.size:
+        return
+    k = int(bad[0])
+    r = RESULTS.of(codes[k])
+    res = float(np.atleast_1d(np.asarray(sol.residual_norm))[k])
+    it = int(np.atleast_1d(np.asarray(sol.iterations))[k])
+    where = f" (item {k}; {bad.size} of {codes.size} failed)" if codes.size > 1 else ""
+    cls = InvalidStateError if r in (RESULTS.inverted_contact, RESULTS.equilibrium,
+                                     RESULTS.beyond_bounds) else NotConvergedError
+    raise cls(f"{what} failed{where}: {r.message} (after {it} iterations, residual {res:.3g} N)",
+              r.hint, r)
 
 
-def solve(bearing, op: Operation, loads, cage_angle=0.0, spall: Spall | None = None, q0=None,
+def _warn_overload(sol):
+    over = np.atleast_1d(np.asarray(sol.overloaded)) & np.atleast_1d(np.asarray(sol.converged))
+    if over.any():
+        p = float(np.max(np.atleast_1d(np.asarray(sol.max_pressure))[over]))
+        warnings.warn(f"contact pressure {p / 1e9:.2f} GPa exceeds {PRESSURE_WARNING / 1e9:.1f} GPa "
+                      "(ISO 76 static-capacity stress): the steel deforms permanently; the Hertz "
+                      "result is an elastic idealisation", OverloadWarning, stacklevel=3)
+
+
+def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None, q0=None,
           speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
           hertz_method: str = "exact", throw: bool = True) -> JonesSolution:
     """Solve the Jones model for one load case.
 
     ``loads`` = [Fx, Fy, Fz, Mx, My] (N, N m) on the inner ring (see :func:`load_vector`).
     Starts from the rigid-ring static solution (omega = 0) unless ``q0`` is given, then goes
-    to speed in ``speed_steps`` steps; if that fails it retries once with 8 speed steps.
-    Raises :class:`NotConvergedError` (``throw=True``) with the residual and a hint.
+    to speed in ``speed_steps`` steps; if that fails it retries once with 8 speed steps (off
+    the hot path).  ``throw=True`` raises :class:`NotConvergedError` or
+    :class:`InvalidStateError` with the reason and a hint; pressures above 4.2 GPa warn
+    (:class:`OverloadWarning`).
     """
     loads = jnp.asarray(loads, dtype=jnp.float64)
     cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
     q0 = None if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
-    maxit, rtol, atol = _traced_tolerances(maxit, rtol, atol)
-    sol = _solve_jit(bearing, op, loads, cage_angle, spall, q0, speed_steps, maxit, rtol, atol,
-                     hertz_method)
-    if int(sol.result) != 0 and speed_steps < 8:
-        retry = _solve_jit(bearing, op, loads, cage_angle, spall, None, 8, maxit, rtol, atol,
-                           hertz_method)
+    maxit, rtol, atol = _traced(maxit, rtol, atol)
+    kw = dict(cage_angle=cage_angle, spall=spall, maxit=maxit, rtol=rtol, atol=atol,
+              hertz_method=hertz_method)
+    sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
+    if int(sol.result) != 0 and (speed_steps < 8 or q0 is not None):
+        retry = _solve_jit(bearing, op, loads, speed_steps=8, **kw)
         if int(retry.result) == 0:
             sol = retry
-    if throw and int(sol.result) != 0:
-        raise NotConvergedError(
-            f"Jones solve did not converge: {RESULT_MESSAGES.get(int(sol.result))} after "
-            f"{int(sol.iterations)} iterations, ring residual {float(sol.residual_norm):.3g} N. "
-            "Hint: check that the loads can be carried by this bearing (a single-row angular "
-            "contact bearing needs axial load in its contact direction to carry moments and "
-            "radial load), or lower the speed.")
+    if throw:
+        raise_for(sol)
+    _warn_overload(sol)
     return sol
 
 
 def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol, atol, hertz_method):
+    curve = stiffness_curve(bearing, hertz_method)
+
     def one(o, F, c):
-        return _solve(bearing, o, F, c, spall, None, speed_steps, maxit, rtol, atol, hertz_method)
+        return solve_state(bearing, o, F, cage_angle=c, spall=spall, speed_steps=speed_steps,
+                           maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, curve=curve)
 
     return jax.vmap(one)(op, loads, cage_angle)
 
@@ -520,12 +598,14 @@ def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol
 _solve_batch_jit = eqx.filter_jit(_solve_batch)
 
 
-def solve_batch(bearing, op: Operation, loads, cage_angle=0.0, spall: Spall | None = None,
+def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None,
                 speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
-                hertz_method: str = "exact") -> JonesSolution:
-    """vmapped solve over N load cases ``loads`` (N, 5); ``op.speed`` may be (N,) or scalar.
+                hertz_method: str = "exact", throw: bool = False) -> JonesSolution:
+    """vmapped solve over N load cases ``loads`` (N, 5); ``op.speed`` and ``cage_angle`` may be
+    (N,) or scalar.  Items that fail are retried once with 8 speed steps (only those).
 
-    Never raises: check ``solution.result`` per item (0 = converged).
+    ``throw=False`` (default): check ``solution.result`` per item (0 = converged and valid);
+    ``throw=True`` raises for the first failed item, naming how many failed.
     """
     loads = jnp.asarray(loads, dtype=jnp.float64)
     n = loads.shape[0]
@@ -533,6 +613,24 @@ def solve_batch(bearing, op: Operation, loads, cage_angle=0.0, spall: Spall | No
                        (jnp.broadcast_to(op.speed, (n,)), jnp.broadcast_to(op.centrifugal, (n,)),
                         jnp.broadcast_to(op.gyroscopic, (n,))))
     cage = jnp.broadcast_to(jnp.asarray(cage_angle, dtype=jnp.float64), (n,))
-    maxit, rtol, atol = _traced_tolerances(maxit, rtol, atol)
-    return _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,
-                            hertz_method)
+    maxit, rtol, atol = _traced(maxit, rtol, atol)
+    sol = _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,
+                           hertz_method)
+    bad = np.flatnonzero(np.asarray(sol.result) != 0)
+    if bad.size and speed_steps < 8:
+        idx = jnp.asarray(bad)
+        sub = lambda a: a[idx]
+        op_r = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
+                           (sub(op_b.speed), sub(op_b.centrifugal), sub(op_b.gyroscopic)))
+        retry = _solve_batch_jit(bearing, op_r, loads[idx], cage[idx], spall, 8, maxit, rtol, atol,
+                                 hertz_method)
+        take = jnp.asarray(np.asarray(retry.result) == 0)
+
+        def merge(a, r):
+            m = take.reshape(take.shape + (1,) * (r.ndim - 1))
+            return a.at[idx].set(jnp.where(m, r, a[idx]))
+
+        sol = jax.tree_util.tree_map(merge, sol, retry)
+    if throw:
+        raise_for(sol, "Jones batch solve")
+    return sol

@@ -59,33 +59,46 @@ class BallKinematics(NamedTuple):
     gyroscopic: jnp.ndarray      # M_g (N m)
 
 
+def ball_kinematics_cs(bearing, op: Operation, sin_i, cos_i, sin_o, cos_o):
+    """:func:`ball_kinematics` from the sines and cosines of the contact angles, free of
+    transcendental functions (the solvers' inner loop): ``(sin b, cos b, omega_m, omega_R, F_c,
+    M_g)``."""
+    g = bearing.g
+    if op.control == "inner":
+        num, den_b = sin_i, cos_i - g
+    else:
+        num, den_b = sin_o, cos_o + g
+    hyp = jnp.sqrt(num * num + den_b * den_b)
+    ok = hyp > 0.0
+    sb = jnp.where(ok, num / jnp.where(ok, hyp, 1.0), 0.0)
+    cb = jnp.where(ok, den_b / jnp.where(ok, hyp, 1.0), 1.0)
+    # omega_m = omega k_i/(k_i+k_o), omega_R = omega k_i k_o/((k_i+k_o) g) with the denominators
+    # cos(alpha - beta) cleared: regular through alpha - beta = 90 deg.  The remaining
+    # denominator n_i c_o + n_o c_i vanishes only for a ball far off both raceways (a geometric
+    # "inner angle" near 180 deg); a floor there keeps the speeds finite and is never active
+    # for a ball in, or near, contact.
+    n_i = 1.0 - g * cos_i
+    n_o = 1.0 + g * cos_o
+    c_i = cos_i * cb + sin_i * sb          # cos(alpha_i - beta)
+    c_o = cos_o * cb + sin_o * sb          # cos(alpha_o - beta)
+    den = jnp.maximum(n_i * c_o + n_o * c_i, _DEN_FLOOR)
+    w = op.speed
+    w_m = w * n_i * c_o / den
+    w_R = w * n_i * n_o / (den * g)
+    Fc = op.centrifugal * 0.5 * bearing.ball_mass * bearing.pitch_diameter * w_m * w_m
+    Mg = op.gyroscopic * bearing.ball_inertia * w_R * w_m * sb
+    return sb, cb, w_m, w_R, Fc, Mg
+
+
 def ball_kinematics(bearing, op: Operation, alpha_i, alpha_o) -> BallKinematics:
     """Pitch angle, orbital and spin speeds, centrifugal force and gyroscopic moment of a ball.
 
     Raceway control decides beta: outer (and "equal") tan(beta) = sin(a_o)/(cos(a_o) + g);
     inner tan(beta) = sin(a_i)/(cos(a_i) - g).  Switches in ``op`` scale F_c and M_g.
     """
-    g = bearing.g
-    if op.control == "inner":
-        beta = jnp.arctan2(jnp.sin(alpha_i), jnp.cos(alpha_i) - g)
-    else:
-        beta = jnp.arctan2(jnp.sin(alpha_o), jnp.cos(alpha_o) + g)
-    # omega_m = omega k_i/(k_i+k_o), omega_R = omega k_i k_o/((k_i+k_o) g) with the denominators
-    # cos(alpha - beta) cleared: regular through alpha - beta = 90 deg.  The remaining
-    # denominator n_i c_o + n_o c_i vanishes only for a ball far off both raceways (a geometric
-    # "inner angle" near 180 deg); a floor there keeps the speeds finite and is never active
-    # for a ball in, or near, contact.
-    n_i = 1.0 - g * jnp.cos(alpha_i)
-    n_o = 1.0 + g * jnp.cos(alpha_o)
-    c_i = jnp.cos(alpha_i - beta)
-    c_o = jnp.cos(alpha_o - beta)
-    den = jnp.maximum(n_i * c_o + n_o * c_i, _DEN_FLOOR)
-    w = op.speed
-    w_m = w * n_i * c_o / den
-    w_R = w * n_i * n_o / (den * g)
-    Fc = op.centrifugal * 0.5 * bearing.ball_mass * bearing.pitch_diameter * w_m ** 2
-    Mg = op.gyroscopic * bearing.ball_inertia * w_R * w_m * jnp.sin(beta)
-    return BallKinematics(beta, w_m, w_R, Fc, Mg)
+    sb, cb, w_m, w_R, Fc, Mg = ball_kinematics_cs(bearing, op, jnp.sin(alpha_i), jnp.cos(alpha_i),
+                                                  jnp.sin(alpha_o), jnp.cos(alpha_o))
+    return BallKinematics(jnp.arctan2(sb, cb), w_m, w_R, Fc, Mg)
 
 
 class DefectFrequencies(NamedTuple):

@@ -1,12 +1,14 @@
 """Cage-angle sweeps (MODEL.md section 6): the quasi-static contact state as the ball set
-rotates past the spall.
+rotates past the defect.
 
-Two ways, same answer: ``scan`` (default) is continuation, one ``lax.scan`` over cage angles
-in which each angle starts from the previous one, with a ``lax.cond`` fallback to the
-rigid-ring static start for an angle whose warm start fails; ``vmap`` solves every angle at
-once, Newton starting from the converged state at the first angle (failures are redone by
-``scan``).  For the rectangular profile, whose state jumps when a ball enters or leaves
-the spall, the angles just before and just after every edge are inserted into the grid.
+All angles are solved at once (``vmap`` of :func:`bearingsim.jones.solve_state`), each warm
+started from the converged state at the first angle: the same ring displacement, and every
+ball's centre interpolated (periodically, in azimuth) from the first angle's undropped balls.
+That is one fixed-shape batched Newton: a handful of large kernels instead of one small solve
+per angle.  Angles that fail from the warm start are solved again from the rigid-ring static
+solution in 8 speed steps (a second compiled program, only when needed).  For the rectangular
+profile, whose state jumps when a ball enters or leaves the spall, the angles just before and
+just after every edge are inserted into the grid.
 """
 from __future__ import annotations
 
@@ -14,9 +16,11 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
 
-from .jones import JonesSolution, _initial_displacement, _solve, _traced_tolerances
+from .hertz import stiffness_curve
+from .jones import JonesSolution, raise_for, solve, solve_state
+
+__all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "sweep", "sweep_chunked"]
 
 EDGE_EPS = 1e-7   # rad: the inserted angles sit this far either side of a spall edge
 
@@ -54,86 +58,108 @@ def sweep_angles(bearing, spall, start, stop, steps, resolve_edges=True):
     return grid
 
 
-def _sweep(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method):
-    def step(q_prev, angle):
-        warm = _solve(bearing, op, loads, angle, spall, q_prev, 1, maxit, rtol, atol, hertz_method)
-
-        def cold(_):
-            return _solve(bearing, op, loads, angle, spall, None, 2, maxit, rtol, atol, hertz_method)
-
-        sol = lax.cond(warm.result == 0, lambda _: warm, cold, None)
-        q_next = jnp.where(sol.result == 0, sol.displacement, q_prev)
-        return q_next, sol
-
-    # the first angle starts from the axial-shift start; if that fails at speed, the cold
-    # branch goes through the rigid-ring static solution
-    q_start = _initial_displacement(bearing, loads, hertz_method)
-    _, sols = lax.scan(step, q_start, angles)
-    return sols
+def _interpolated_balls(bearing, first: JonesSolution, angle):
+    """Ball centres (Z, 2) at cage angle ``angle`` interpolated periodically in azimuth from the
+    first angle's undropped balls (smooth in psi)."""
+    Z = bearing.n_balls
+    pitch = 2 * jnp.pi / Z
+    u = jnp.mod(bearing.ball_azimuths(angle) - first.cage_angle, 2 * jnp.pi) / pitch
+    k = jnp.floor(u).astype(jnp.int32)
+    f = (u - k)[:, None]
+    X = first.undropped_position
+    return (1.0 - f) * X[k % Z] + f * X[(k + 1) % Z]
 
 
-_sweep_jit = eqx.filter_jit(_sweep)
-
-
-def _sweep_vmap(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method):
-    # every angle starts Newton from the converged state at the first angle (one cold solve),
-    # all angles at once: the batch amortises the per-operation cost of the small ball problems
-    first = _solve(bearing, op, loads, angles[0], spall, None, 1, maxit, rtol, atol, hertz_method)
-    q0 = first.displacement
+def _sweep_warm(bearing, op, loads, spall, first, angles, maxit, rtol, atol, hertz_method):
+    curve = stiffness_curve(bearing, hertz_method)
 
     def one(angle):
-        return _solve(bearing, op, loads, angle, spall, q0, 1, maxit, rtol, atol, hertz_method)
+        x0 = _interpolated_balls(bearing, first, angle)
+        x0 = jnp.where(op.speed > 0.0, x0, jnp.nan)      # at rest the closed form is exact
+        return solve_state(bearing, op, loads, cage_angle=angle, spall=spall,
+                           q0=first.displacement, x0=x0, xu0=x0, maxit=maxit, rtol=rtol,
+                           atol=atol, hertz_method=hertz_method, curve=curve)
 
     return jax.vmap(one)(angles)
 
 
-_sweep_vmap_jit = eqx.filter_jit(_sweep_vmap)
+_sweep_warm_jit = eqx.filter_jit(_sweep_warm)
 
 
-def sweep(bearing, op, loads, spall=None, angles=None, start=0.0, stop=None, steps=181,
-          resolve_edges=True, method="scan", maxit=60, rtol=1e-11, atol=1e-9,
-          hertz_method="exact") -> JonesSolution:
+def _sweep_cold(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method):
+    curve = stiffness_curve(bearing, hertz_method)
+    return jax.vmap(lambda a: solve_state(
+        bearing, op, loads, cage_angle=a, spall=spall, speed_steps=8, maxit=maxit, rtol=rtol,
+        atol=atol, hertz_method=hertz_method, curve=curve))(angles)
+
+
+_sweep_cold_jit = eqx.filter_jit(_sweep_cold)
+
+
+def _tolerances(maxit, rtol, atol):
+    return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
+
+
+def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, steps=181,
+          resolve_edges=True, first=None, maxit=60, rtol=1e-11, atol=1e-9,
+          hertz_method="exact", throw=False) -> JonesSolution:
     """Quasi-static states over cage angles: a JonesSolution whose arrays have a leading (N,) axis.
 
     Give ``angles`` (rad) or ``start``/``stop`` (rad, default one ball pitch)/``steps``.
-    ``method="scan"`` (default, faster on CPU) is continuation (``lax.scan``, each angle from the
-    previous one, cold restart where that fails); ``method="vmap"`` solves all angles at once
-    from the converged first angle and redoes failures by continuation.  Never raises:
-    ``result`` is per angle.
+    ``first``: a converged solution to warm start from (default: a cold solve at the first
+    angle).  ``throw=False`` (default): ``result`` is per angle; ``throw=True`` raises for the
+    first angle that failed (naming how many did).
     """
     if angles is None:
         stop = start + 2 * np.pi / bearing.n_balls if stop is None else stop
         angles = sweep_angles(bearing, spall, start, stop, steps, resolve_edges)
     angles = jnp.asarray(angles, dtype=jnp.float64)
-    maxit, rtol, atol = _traced_tolerances(maxit, rtol, atol)
     loads = jnp.asarray(loads, jnp.float64)
-    if method == "scan":
-        return _sweep_jit(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method)
-    if method != "vmap":
-        raise ValueError(f"sweep method must be 'vmap' or 'scan', got {method!r}")
-    sol = _sweep_vmap_jit(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method)
-    bad = np.flatnonzero(np.asarray(sol.result) != 0)
+    tol = _tolerances(maxit, rtol, atol)
+    if first is None:
+        first = solve(bearing, op, loads, cage_angle=angles[0], spall=spall, maxit=maxit,
+                      rtol=rtol, atol=atol, hertz_method=hertz_method, throw=False)
+    if int(first.result) == 0:
+        sol = _sweep_warm_jit(bearing, op, loads, spall, first, angles, *tol, hertz_method)
+        bad = np.flatnonzero(np.asarray(sol.result) != 0)
+    else:
+        sol, bad = None, np.arange(angles.shape[0])
     if bad.size:
-        redo = _sweep_jit(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method)
-        idx = jnp.asarray(bad)
-        sol = jax.tree_util.tree_map(lambda a, r: a.at[idx].set(r[idx]), sol, redo)
+        # pad to a power of two: one compiled shape for any number of failures
+        n = 1 << int(np.ceil(np.log2(bad.size)))
+        idx = np.concatenate([bad, np.full(n - bad.size, bad[0])])
+        redo = _sweep_cold_jit(bearing, op, loads, spall, angles[idx], *tol, hertz_method)
+        redo = jax.tree_util.tree_map(lambda r: r[:bad.size], redo)
+        if sol is None:
+            sol = redo
+        else:
+            ok = np.asarray(redo.result) == 0
+            take = jnp.asarray(bad[ok])
+            sol = jax.tree_util.tree_map(lambda a, r: a.at[take].set(r[jnp.asarray(ok)]), sol, redo)
+    if throw:
+        raise_for(sol, "cage-angle sweep")
     return sol
 
 
-def sweep_chunked(bearing, op, loads, spall, angles, chunk=64, progress=None, **kw):
-    """The same sweep in chunks (continuation carried across chunks), calling ``progress(n)``
-    after each chunk: for progress bars on long sweeps.  One compilation per chunk length."""
+def sweep_chunked(bearing, op, loads, spall, angles, chunk=256, progress=None, **kw):
+    """The same sweep in chunks of ``chunk`` angles (all warm started from one cold solve at the
+    first angle), calling ``progress(n)`` after each chunk: for progress bars on long sweeps.
+    One compilation for every chunk (the last one is padded)."""
     angles = np.asarray(angles, dtype=float)
+    if len(angles) <= chunk:
+        sol = sweep(bearing, op, loads, spall, angles=angles, **kw)
+        if progress is not None:
+            progress(len(angles))
+        return sol
+    first = solve(bearing, op, jnp.asarray(loads, jnp.float64), cage_angle=angles[0], spall=spall,
+                  throw=False, **{k: v for k, v in kw.items() if k in ("maxit", "rtol", "atol",
+                                                                        "hertz_method")})
     parts = []
     for k in range(0, len(angles), chunk):
         part = angles[k:k + chunk]
-        if len(part) < chunk and len(angles) > chunk:   # keep one compiled shape: pad, then cut
-            pad = np.concatenate([part, np.full(chunk - len(part), part[-1])])
-            sol = sweep(bearing, op, loads, spall, angles=pad, **kw)
-            sol = jax.tree_util.tree_map(lambda a: a[:len(part)], sol)
-        else:
-            sol = sweep(bearing, op, loads, spall, angles=part, **kw)
-        parts.append(sol)
+        pad = np.concatenate([part, np.full(chunk - len(part), part[-1])])
+        sol = sweep(bearing, op, loads, spall, angles=pad, first=first, **kw)
+        parts.append(jax.tree_util.tree_map(lambda a: a[:len(part)], sol))
         if progress is not None:
             progress(len(part))
     return jax.tree_util.tree_map(lambda *a: jnp.concatenate(a, axis=0), *parts)
