@@ -21,7 +21,7 @@ Conventions
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from numbers import Integral, Real
 
 import numpy as np
@@ -38,6 +38,8 @@ __all__ = [
     "harmonic_peaks",
     "select_band",
     "defect_markers",
+    "RecordMetrics",
+    "record_metrics",
 ]
 
 
@@ -400,3 +402,104 @@ def defect_markers(freqs: dict, n_harmonics: int = 5, harmonics_of=("BPFO",)):
         else:
             out.append((str(label), f))
     return out
+
+
+# --------------------------------------------------------------------------- record metrics
+@dataclass(frozen=True)
+class RecordMetrics:
+    """Headline metrics of one vibration record (see :func:`record_metrics`).
+
+    rms                 : RMS of the de-meaned record (its unit, g for the CWRU records)
+    kurtosis            : kurtosis E[x^4]/E[x^2]^2 of the de-meaned record (3 for Gaussian noise)
+    band_kurtosis       : the same of the band-passed signal
+    peak_hz             : squared-envelope-spectrum peak within +-5 % of the fault frequency (Hz)
+    peak_order          : peak_hz / shaft_hz
+    peak_over_median_db : 20 log10(peak / median of the spectrum over 30-600 Hz)
+    peak_over_local_db  : 20 log10(peak / median over 0.5-1.5 x the nominal fault frequency)
+    a2_a1, a3_a1        : largest lines within +-1 % of 2 and 3 x peak_hz over the first
+    """
+
+    rms: float
+    kurtosis: float
+    band_kurtosis: float
+    peak_hz: float
+    peak_order: float
+    peak_over_median_db: float
+    peak_over_local_db: float
+    a2_a1: float
+    a3_a1: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _largest_near(f, S, f0, rel):
+    m = (f > f0 * (1.0 - rel)) & (f < f0 * (1.0 + rel))
+    if not m.any():
+        raise ValueError(f"no spectrum bin within {f0:g} Hz +- {100 * rel:g} %")
+    i = int(np.argmax(S[m]))
+    return float(f[m][i]), float(S[m][i])
+
+
+def record_metrics(x, fs, shaft_hz, fault_order, band=(2500.0, 5500.0),
+                   median_window=(30.0, 600.0)) -> RecordMetrics:
+    """RMS, kurtosis and squared-envelope metrics of a record, exactly as the reference analysis.
+
+    This is the procedure of ``../shared/realdata/analyze_real.py`` (fixed band) that produced the
+    real-record table of ``reference-data.md``, so simulated and measured records are compared
+    with one analysis:
+
+    * ``x`` is de-meaned; RMS and kurtosis (non-excess) of the whole record;
+    * band-pass ``band`` (Butterworth order 4, zero phase), squared envelope ``|hilbert|**2``
+      minus its mean (:func:`squared_envelope`), symmetric Hann window (``np.hanning``),
+      zero-padded to ``nfft = 2**(ceil(log2 n) + 2)``, amplitude ``|rfft| * 2 / sum(w)``;
+    * the fault line is the largest bin within ``fault_order * shaft_hz * (1 +- 5 %)`` (no
+      interpolation); A2, A3 are the largest bins within ``k * peak_hz * (1 +- 1 %)``;
+    * peak over median: against the median of the spectrum over ``median_window`` (30-600 Hz,
+      as in reference-data.md) and, as analyze_real.py prints it, over 0.5-1.5 x the nominal
+      fault frequency.
+
+    Both peak-over-median figures grow with record length (the line is coherent, the floor is
+    not: about +10 log10(T2/T1) dB), so compare records of equal duration.
+    """
+    fs = _check_fs(fs)
+    x = _check_signal(x, min_len=16)
+    shaft_hz = _check_freq(shaft_hz, "shaft_hz")
+    fault_order = _check_freq(fault_order, "fault_order")
+    if shaft_hz <= 0.0 or fault_order <= 0.0:
+        raise ValueError(f"shaft_hz and fault_order must be > 0, got {shaft_hz:g}, {fault_order:g}")
+    b = _unpack_band(band, fs)
+    if b is None:
+        raise ValueError("band must be a pair (f_lo, f_hi) in Hz")
+    lo, hi = (_check_freq(v, "median_window") for v in median_window)
+    if not 0.0 <= lo < hi:
+        raise ValueError(f"median_window must be (lo, hi) with 0 <= lo < hi, got {median_window!r}")
+    x = x - x.mean()
+    m2 = float(np.mean(x * x))
+    if m2 == 0.0:
+        raise ValueError("x is constant: RMS and kurtosis are undefined")
+    y = bandpass(x, fs, *b)
+    yc = y - y.mean()
+    e2 = np.abs(ss.hilbert(y)) ** 2
+    e2 -= e2.mean()
+    w = np.hanning(e2.size)
+    nfft = 1 << (int(np.ceil(np.log2(e2.size))) + 2)
+    S = np.abs(np.fft.rfft(e2 * w, nfft)) * 2.0 / w.sum()
+    f = np.fft.rfftfreq(nfft, 1.0 / fs)
+    f_nom = fault_order * shaft_hz
+    f1, a1 = _largest_near(f, S, f_nom, 0.05)
+    _, a2 = _largest_near(f, S, 2.0 * f1, 0.01)
+    _, a3 = _largest_near(f, S, 3.0 * f1, 0.01)
+    med = float(np.median(S[(f > lo) & (f < hi)]))
+    loc = float(np.median(S[(f > 0.5 * f_nom) & (f < 1.5 * f_nom)]))
+    return RecordMetrics(
+        rms=float(np.sqrt(m2)),
+        kurtosis=float(np.mean(x**4) / m2**2),
+        band_kurtosis=float(np.mean(yc**4) / np.mean(yc * yc) ** 2),
+        peak_hz=f1,
+        peak_order=f1 / shaft_hz,
+        peak_over_median_db=float(20.0 * np.log10(a1 / med)),
+        peak_over_local_db=float(20.0 * np.log10(a1 / loc)),
+        a2_a1=a2 / a1,
+        a3_a1=a3 / a1,
+    )
