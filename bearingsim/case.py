@@ -50,7 +50,11 @@ __all__ = [
     "UNITS",
     "load_case",
     "parse_case",
+    "case_path",
+    "shipped_cases",
+    "shipped_cases_dir",
     "case_from_dict",
+    "unit_of",
     "to_toml",
     "schema_reference_markdown",
 ]
@@ -455,6 +459,14 @@ def _lookup(dotted: str) -> Key | None:
     path, key = _split_key(dotted)
     sec = SCHEMA.get(path)
     return None if sec is None else sec.keys.get(key)
+
+
+def unit_of(dotted_key: str) -> str:
+    """Unit of a case key as shown in files and messages ("mm", "rpm", "N m"; "" if none)."""
+    spec = _lookup(dotted_key)
+    if spec is None:
+        raise KeyError(f"'{dotted_key}' is not a case key: {_suggest(dotted_key, _all_keys())}")
+    return spec.unit_label
 
 
 def _all_keys() -> list[str]:
@@ -1084,10 +1096,44 @@ def parse_case(text: str, source: str = "<string>") -> Case:
     return _case_from_raw(raw, text, source)
 
 
-def load_case(path) -> Case:
-    """Read and validate a case file.  Error lines are prefixed with ``path`` as given."""
-    p = Path(path)
-    return parse_case(p.read_text(encoding="utf-8"), source=str(path))
+def shipped_cases_dir() -> Path:
+    """Folder of the cases shipped with bearingsim: ``bearingsim/cases`` in an installed wheel,
+    the top-level ``cases/`` of a source checkout (editable install)."""
+    from importlib.resources import files
+
+    installed = Path(str(files("bearingsim"))) / "cases"
+    return installed if installed.is_dir() else Path(__file__).resolve().parent.parent / "cases"
+
+
+def shipped_cases() -> list[str]:
+    """Names of the shipped cases, as :func:`load_case` takes them ("demo", "seed/speed", ...)."""
+    root = shipped_cases_dir()
+    return sorted(p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.toml"))
+
+
+def case_path(name_or_path) -> Path:
+    """The file a case argument names: an existing file as given, else a shipped case by name
+    (``"cwru_6205"``, ``"seed/speed"``, with or without ``.toml``).  Raises CaseError."""
+    p = Path(name_or_path)
+    if p.is_dir():
+        raise CaseError(str(name_or_path), ["is a directory, not a case file: give a .toml file"])
+    if p.is_file():
+        return p
+    names = shipped_cases()
+    name = p.as_posix().removesuffix(".toml")
+    if name in names:
+        return shipped_cases_dir() / f"{name}.toml"
+    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    hint = f"did you mean '{close[0]}'?" if close else "shipped cases: " + ", ".join(names)
+    raise CaseError(str(name_or_path), [f"no such case file, and no shipped case of that name: {hint}"])
+
+
+def load_case(name_or_path) -> Case:
+    """Read and validate a case file, or a shipped case by name (see :func:`case_path`).  Error
+    lines are prefixed with the path as given."""
+    p = case_path(name_or_path)
+    source = str(name_or_path) if p == Path(name_or_path) else str(p)
+    return parse_case(p.read_text(encoding="utf-8"), source=source)
 
 
 def case_from_dict(data: dict, source: str = "<dict>") -> Case:

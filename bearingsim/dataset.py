@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -86,11 +86,22 @@ def result_messages() -> dict:
 
 @dataclass(frozen=True)
 class DatasetSummary:
+    """What :func:`make_dataset` wrote: ``failed`` items (``failures``: code -> count of the
+    :data:`DatasetResult` codes != 0 among them)."""
+
     path: Path
     count: int
     samples: int
     failed: int
     seconds: float          # wall time of the simulations (compilation included)
+    failures: dict = field(default_factory=dict)
+
+    @property
+    def converged(self) -> bool:
+        return self.failed == 0
+
+    def message(self) -> list:
+        return [f"{n} {DatasetResult(c).message}" for c, n in sorted(self.failures.items())]
 
     @property
     def seconds_per_item(self) -> float:
@@ -270,4 +281,6 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
             lb.attrs["description"] = (
                 "one row per item (row i of /signals); healthy items have spall depth and length 0; "
                 "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item; result 0 = ok")
-    return DatasetSummary(Path(path), n, T, failed, time.perf_counter() - t0)
+    codes, counts = np.unique(lab["result"][lab["result"] != 0], return_counts=True)
+    return DatasetSummary(Path(path), n, T, failed, time.perf_counter() - t0,
+                          {int(c): int(k) for c, k in zip(codes, counts)})

@@ -166,7 +166,7 @@ _STATE_FIELDS = {
     "stiffness": ("stiffness", STIFFNESS_UNITS),
     "iterations": ("iterations", "1"),
     "residual_norm": ("residual_norm", "N (moments divided by R_i)"),
-    "result": ("result", "1 (0 = converged; see bearingsim.RESULT_MESSAGES)"),
+    "result": ("result", "1 (0 = converged; see bearingsim.RESULTS)"),
 }
 
 
@@ -183,4 +183,93 @@ def state_datasets(sol):
             mask = ok.reshape(ok.shape + (1,) * (a.ndim - ok.ndim))
             a = np.where(mask & np.isfinite(a), a, 0.0) if not np.all(ok) else a
         out[name] = (a, units)
+    return out
+
+
+# ----------------------------------------------------------------------------- results files
+def case_attrs(case) -> dict:
+    """Root attributes of every results file written for a case: its TOML and title."""
+    return {"case_toml": case.text, "title": case.title}
+
+
+def write_static(path, sol):
+    """The JSON of ``bearingsim static`` (:func:`static_to_dict`)."""
+    write_json(path, static_to_dict(sol))
+
+
+def write_sweep(path, case, sol):
+    """The HDF5 of ``bearingsim sweep``: group ``/sweep`` (:func:`state_datasets`)."""
+    write_h5(path, {"sweep": state_datasets(sol)}, attrs=case_attrs(case))
+
+
+def write_study(path, case, study):
+    """The HDF5 of ``bearingsim study``: group ``/study`` with (M, N) states, ``values`` (in the
+    key's unit) and the attribute ``parameter``."""
+    ds = state_datasets(study.solution)
+    ds["values"] = (np.asarray(study.values, dtype=float), study.unit or "1")
+    ds["@attrs"] = {"parameter": study.parameter}
+    write_h5(path, {"study": ds}, attrs=case_attrs(case))
+
+
+def simulation_datasets(res, balls):
+    """The fixed ``/dynamics`` layout of ``bearingsim simulate`` (SI)."""
+    attrs = dict(res.frequencies)
+    attrs.update(
+        contact_angle_rad=float(res.contact_angle),
+        frequency_note=("ftf = quasi-static cage speed / 2 pi, bpfo = Z ftf; bpfi and bsf (once per "
+                        "ball revolution) from MODEL.md section 8 at the mean loaded contact angle "
+                        "contact_angle_rad"),
+        result=int(res.result), num_steps=int(res.num_steps), balls=int(balls),
+        ball_iterations=int(res.ball_iterations),
+        contact_damping_Ns_per_m=np.asarray(res.contact_damping))
+    return {
+        "time": (np.asarray(res.time), "s"),
+        "cage_angle": (np.asarray(res.cage_angle), "rad"),
+        "ring_displacement": (np.asarray(res.ring_displacement), "m (shaft relative to housing: x, y, axial)"),
+        "housing_displacement": (np.asarray(res.housing_displacement), "m (x, y)"),
+        "housing_acceleration": (np.asarray(res.housing_acceleration), "m/s^2 (x, y)"),
+        "sensor_acceleration": (np.asarray(res.sensor_acceleration), "m/s^2"),
+        "Q_inner": (np.asarray(res.Q_inner), "N"),
+        "Q_outer": (np.asarray(res.Q_outer), "N"),
+        "alpha_inner": (np.asarray(res.alpha_inner), "rad"),
+        "alpha_outer": (np.asarray(res.alpha_outer), "rad"),
+        "spall_edge_times": (np.asarray(res.jump_times, float), "s"),
+        "spall_pass_times": (np.asarray(res.pass_times, float), "s"),
+        "@attrs": attrs,
+    }
+
+
+def write_simulation(path, case, res):
+    """The HDF5 of ``bearingsim simulate``: group ``/dynamics`` (:func:`simulation_datasets`)."""
+    write_h5(path, {"dynamics": simulation_datasets(res, case.bearing().n_balls)}, attrs=case_attrs(case))
+
+
+_FREQUENCIES = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+
+
+def read_simulation(path) -> dict:
+    """Read back a ``bearingsim simulate`` file: dict(time, sensor_acceleration, frequencies
+    {shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz}, case: the stored Case or None).  Raises
+    :class:`~bearingsim.errors.InputError` for anything else."""
+    import h5py
+
+    from .case import CaseError, parse_case
+    from .errors import InputError
+
+    if Path(path).is_dir():
+        raise InputError(f"{path}: is a directory, not a bearingsim simulate output")
+    try:
+        with h5py.File(path, "r") as f:
+            g = f["dynamics"]
+            out = {"time": g["time"][()], "sensor_acceleration": g["sensor_acceleration"][()],
+                   "frequencies": {k: float(g.attrs[k]) for k in _FREQUENCIES}}
+            toml = f.attrs.get("case_toml", "")
+    except (OSError, KeyError) as e:
+        raise InputError(f"{path}: not a bearingsim simulate output ({e})") from None
+    if out["time"].size < 2:
+        raise InputError(f"{path}: /dynamics/time has {out['time'].size} samples; need at least 2")
+    try:
+        out["case"] = parse_case(toml, source=f"{path}:case_toml") if toml else None
+    except CaseError:
+        out["case"] = None
     return out

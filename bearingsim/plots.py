@@ -233,3 +233,94 @@ def plot_study(study_sols, values, parameter, unit_label="", title="", spall=Non
     axt.set_ylabel("$Q_o$ (solid), $Q_i$ (dashed) of the passing ball (N)")
     axt.grid(alpha=0.3)
     return _finish(fig, title, path, dpi=120)
+
+
+# ------------------------------------------------------------------------------- dynamics
+def _balls_over_spall(res, bearing, spall):
+    """Balls that cross the spall during a simulation (else the three most loaded)."""
+    Qo = np.asarray(res.Q_outer)
+    if spall is not None and bearing is not None:
+        import jax.numpy as jnp
+
+        from .defect import depth_profile
+
+        Z = Qo.shape[1]
+        psi = np.asarray(res.cage_angle)[:, None] + 2 * np.pi * np.arange(Z) / Z
+        inside = np.asarray(depth_profile(bearing, spall, jnp.asarray(psi))) > 0
+        balls = np.flatnonzero(inside.any(axis=0))
+        if balls.size:
+            return balls
+    return np.argsort(-Qo.max(axis=0))[:3]
+
+
+def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=None):
+    """Figures of a dynamic simulation written into ``outdir``: sensor acceleration (whole run and
+    three spall passes), outer loads of the balls that pass the spall, and the envelope spectrum
+    with BPFO, FTF and shaft markers when ``spectrum`` is given.  Returns the paths written."""
+    from pathlib import Path
+
+    from .plots_signal import plot_envelope_spectrum, plot_time_history
+
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    t = np.asarray(res.time)
+    a = np.asarray(res.sensor_acceleration)
+    passes = np.asarray(res.pass_times)
+    fr = res.frequencies
+    written = [outdir / "sensor_acceleration.png"]
+    plt.close(plot_time_history(t, a, marks=passes, title=f"{title}: sensor acceleration", path=written[-1]))
+    if passes.size:
+        t0 = max(float(t[0]), float(passes[0]) - 0.5 / fr["bpfo_Hz"])
+        t1 = min(float(t[-1]), t0 + 3.0 / fr["bpfo_Hz"])
+        written.append(outdir / "sensor_acceleration_zoom.png")
+        plt.close(plot_time_history(t, a, marks=passes, zoom=(t0, t1), path=written[-1],
+                                    title=f"{title}: sensor acceleration (3 spall passes)"))
+    fig, ax = plt.subplots(figsize=(10, 4), constrained_layout=True)
+    Qo = np.asarray(res.Q_outer)
+    for j in _balls_over_spall(res, bearing, spall):
+        ax.plot(t * 1e3, Qo[:, j], lw=0.8, label=f"ball {j}")
+    for tm in passes[:30]:
+        ax.axvline(tm * 1e3, color="#d62728", ls=":", lw=0.8)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("outer contact load Q_o (N)")
+    ax.set_title(f"{title}: outer loads of the balls that pass the spall")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=4)
+    written.append(outdir / "ball_loads.png")
+    _finish(fig, "", written[-1])
+    if spectrum is not None:
+        written.append(outdir / "envelope_spectrum.png")
+        plt.close(plot_envelope_spectrum(spectrum, {"BPFO": fr["bpfo_Hz"], "FTF": fr["ftf_Hz"],
+                                                    "shaft": fr["shaft_Hz"]},
+                                         title=f"{title}: squared-envelope spectrum", path=written[-1],
+                                         fmax=5.5 * fr["bpfo_Hz"]))
+    return written
+
+
+def plot_compare(comparison, title="", path=None):
+    """Dynamic run against the quasi-static sweep at its cage angles (a
+    :class:`bearingsim.workflows.Comparison`): Q_o, Q_i, alpha_o of the ball whose load varies
+    most, and the ring displacement, against the cage angle."""
+    res, idx, qs = comparison.dynamic, comparison.indices, comparison.quasi_static
+    th = np.unwrap(np.asarray(res.cage_angle)) * RAD2DEG
+    j = int(np.argmax(np.ptp(np.asarray(res.Q_outer)[idx], axis=0)))
+    fig, axes = plt.subplots(2, 2, figsize=(13, 7.5), constrained_layout=True)
+    for ax, (name, lab, f) in zip(axes.ravel()[:3], (("Q_outer", "$Q_o$ (N)", 1.0), ("Q_inner", "$Q_i$ (N)", 1.0),
+                                                      ("alpha_outer", r"$\alpha_o$ (deg)", RAD2DEG))):
+        ax.plot(th, np.asarray(getattr(res, name))[:, j] * f, lw=0.9, label=f"dynamic, ball {j}")
+        ax.plot(th[idx], np.asarray(getattr(qs, name))[:, j] * f, ".", ms=3, label="quasi-static sweep")
+        ax.set_xlabel("cage angle θ_c (deg)")
+        ax.set_ylabel(lab)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    ax = axes[1, 1]
+    qd = np.asarray(res.ring_displacement) * 1e6
+    for k, lab in enumerate(("x", "y", "axial")):
+        line, = ax.plot(th, qd[:, k], lw=0.9, label=f"{lab} dynamic")
+        ax.plot(th[idx], np.asarray(qs.displacement)[:, k] * 1e6, ".", ms=3, color=line.get_color(),
+                label=f"{lab} quasi-static")
+    ax.set_xlabel("cage angle θ_c (deg)")
+    ax.set_ylabel("ring displacement (µm)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    return _finish(fig, f"{title}: static vs swept vs dynamic" if title else "", path)

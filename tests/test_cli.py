@@ -82,7 +82,7 @@ def test_non_convergence_exit_3_with_hint(tmp_path, capsys):
                     .split("[defect]")[0])
     assert cli.main(["static", str(case), "--json", str(tmp_path / "x.json")]) == 3
     err = capsys.readouterr().err
-    assert "did not converge" in err and "residual" in err and "Hint" in err
+    assert "hard.toml: the quasi-static solve failed" in err and "residual" in err and "Hint" in err
     assert not (tmp_path / "x.json").exists()
 
 

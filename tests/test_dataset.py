@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
-from bearingsim.cli import _band, main
+from bearingsim.cli import main
+from bearingsim.workflows import envelope_band
 from bearingsim.dataset import LABEL_FIELDS, draw_labels, make_dataset
 from bearingsim.signal import envelope_spectrum, peak_frequency
 
@@ -94,7 +95,7 @@ def test_envelope_peak_at_labelled_bpfo(tmp_path):
     with h5py.File(tmp_path / "e.h5", "r") as f:
         x, L, t = f["signals"][()], f["labels"][()], f["time"][()]
     fs = 1.0 / (t[1] - t[0])
-    band = _band(fs, case.dynamics_settings()["resonance_frequency"])
+    band = envelope_band(fs, case.dynamics_settings()["resonance_frequency"])
     for i in np.flatnonzero(~L["healthy"]):
         es = envelope_spectrum(x[i].astype(float), fs, band=band)
         fp = peak_frequency(es, L["bpfo_Hz"][i], rel_window=0.1)

@@ -1,0 +1,138 @@
+"""Plain-text reports of cases and results: what ``bearingsim info|static|study|compare|spectrum``
+print, usable as they are from Python (``print(report.info_text(case))``).
+
+Engineering units in every label; the results themselves stay SI.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["table", "info_text", "static_text", "study_text", "compare_text", "spectrum_text"]
+
+RAD2DEG = 180.0 / np.pi
+
+
+def table(headers, rows, fmts) -> str:
+    """Right-aligned text table: one ``fmts`` format string per column."""
+    cols = [[h] + [f.format(r[i]) for r in rows] for i, (h, f) in enumerate(zip(headers, fmts))]
+    w = [max(len(c) for c in col) for col in cols]
+    lines = ["  ".join(c[0].rjust(wi) for c, wi in zip(cols, w)), "  ".join("-" * wi for wi in w)]
+    for k in range(len(rows)):
+        lines.append("  ".join(c[k + 1].rjust(wi) for c, wi in zip(cols, w)))
+    return "\n".join(lines)
+
+
+def _pairs(rows) -> list[str]:
+    return [f"  {k:<32} {v}" for k, v in rows]
+
+
+def info_text(case) -> str:
+    """Geometry, Hertz constants at alpha_0, kinematics, defect frequencies and spall of a case."""
+    import bearingsim as bs
+
+    b = case.bearing()
+    op = case.operation()
+    a0 = float(b.free_contact_angle)
+    out = [f"{case.title}", "=" * len(case.title), "", "Geometry"]
+    out += _pairs([
+        ("balls Z", f"{b.n_balls}"),
+        ("ball diameter D", f"{float(b.ball_diameter)*1e3:.4f} mm"),
+        ("pitch diameter d_m", f"{float(b.pitch_diameter)*1e3:.4f} mm"),
+        ("groove curvature f_i / f_o", f"{float(b.f_inner):.4f} / {float(b.f_outer):.4f}"),
+        ("total conformity B", f"{float(b.B):.4f}"),
+        ("groove-centre distance A = BD", f"{float(b.A)*1e3:.4f} mm"),
+        ("free contact angle alpha_0", f"{a0*RAD2DEG:.3f} deg"),
+        ("diametral clearance P_d", f"{float(b.diametral_clearance)*1e3:.4f} mm"),
+        ("inner groove-centre radius R_i", f"{float(b.inner_groove_radius)*1e3:.4f} mm"),
+        ("outer raceway radius R_o", f"{float(b.outer_raceway_radius)*1e3:.4f} mm"),
+        ("ball mass m / inertia J", f"{float(b.ball_mass)*1e3:.3f} g / {float(b.ball_inertia):.4e} kg m^2"),
+        ("effective modulus E'", f"{float(b.effective_modulus)/1e9:.2f} GPa"),
+    ])
+    out += ["", f"Hertz point contact at alpha_0 ({case.hertz_method})"]
+    rows = []
+    for name, inner in (("inner", True), ("outer", False)):
+        c = bs.hertz_contact(b, a0, inner, case.hertz_method)
+        rows.append((name, float(c.sum_rho) / 1e3, float(c.F_rho), float(c.kappa), float(c.K_ell),
+                     float(c.E_ell), float(c.K) / 1e3 ** 1.5))
+    out.append(table(("contact", "sum_rho (1/mm)", "F(rho)", "kappa", "K(e)", "E(e)", "K (N/mm^1.5)"), rows,
+                     ("{}", "{:.5f}", "{:.5f}", "{:.4f}", "{:.5f}", "{:.5f}", "{:.5g}")))
+    n = float(op.speed_rpm)
+    kin = bs.ball_kinematics(b, op, a0, a0)
+    out += ["", f"Kinematics at alpha_0, {n:.1f} rpm, {op.control} raceway control"]
+    out += _pairs([("orbital (cage) speed", f"{float(kin.orbital_speed)*60/(2*np.pi):.2f} rpm"),
+                   ("ball spin speed", f"{float(kin.spin_speed)*60/(2*np.pi):.2f} rpm"),
+                   ("spin-axis pitch beta", f"{float(kin.beta)*RAD2DEG:.3f} deg"),
+                   ("centrifugal force F_c", f"{float(kin.centrifugal):.3f} N"),
+                   ("gyroscopic moment M_g", f"{float(kin.gyroscopic):.5f} N m")])
+    f = bs.defect_frequencies(b, n / 60.0, a0)
+    per_hz = bs.defect_frequencies(b, 1.0, a0)          # multiples of the shaft frequency
+    out += ["", f"Defect frequencies at alpha_0 (shaft {n/60:.3f} Hz); BSF once per ball revolution"]
+    for name, field in (("FTF", "ftf"), ("BPFO", "bpfo"), ("BPFI", "bpfi"), ("BSF", "bsf"), ("2 BSF", "two_bsf")):
+        out.append(f"  {name:<6} {float(getattr(f, field)):10.3f} Hz   {float(getattr(per_hz, field)):.5f} x shaft")
+    sp = case.spall()
+    if sp is not None:
+        out += ["", "Spall on the outer raceway",
+                f"  centre {float(sp.center)*RAD2DEG:.2f} deg, extent {float(sp.extent)*RAD2DEG:.3f} deg "
+                f"(arc {float(sp.length(b))*1e3:.3f} mm), depth {float(sp.depth)*1e3:.3f} mm, {sp.profile}"]
+    return "\n".join(out)
+
+
+def static_text(case, sol) -> str:
+    """Per-ball table, ring displacement, cage speed and stiffness diagonal of a solution."""
+    q = np.asarray(sol.displacement)
+    K = np.asarray(sol.stiffness)
+    lines = [f"{case.title}",
+             f"converged in {int(sol.iterations)} iterations, ring residual {float(sol.residual_norm):.2e} N",
+             f"ring displacement: x {q[0]*1e6:.4f} um, y {q[1]*1e6:.4f} um, axial {q[2]*1e6:.4f} um, "
+             f"tilt_x {q[3]*1e3:.5f} mrad, tilt_y {q[4]*1e3:.5f} mrad",
+             f"cage speed {float(sol.cage_speed)*60/(2*np.pi):.2f} rpm", ""]
+    rows = [(j, float(np.mod(sol.azimuth[j], 2 * np.pi)) * RAD2DEG, float(sol.alpha_inner[j]) * RAD2DEG,
+             float(sol.alpha_outer[j]) * RAD2DEG, float(sol.Q_inner[j]), float(sol.Q_outer[j]),
+             float(sol.delta_inner[j]) * 1e6, float(sol.delta_outer[j]) * 1e6,
+             float(sol.centrifugal[j]), float(sol.gyroscopic_moment[j]),
+             float(sol.p_max_inner[j]) * 1e-6, float(sol.p_max_outer[j]) * 1e-6)
+            for j in range(sol.azimuth.shape[0])]
+    lines.append(table(("ball", "psi deg", "a_i deg", "a_o deg", "Q_i N", "Q_o N", "d_i um", "d_o um", "F_c N",
+                        "M_g N m", "p_i MPa", "p_o MPa"), rows,
+                       ("{}", "{:.2f}", "{:.3f}", "{:.3f}", "{:.1f}", "{:.1f}", "{:.3f}", "{:.3f}", "{:.2f}",
+                        "{:.4f}", "{:.0f}", "{:.0f}")))
+    lines += ["", "stiffness diagonal: "
+              f"k_x {K[0,0]:.4e} N/m, k_y {K[1,1]:.4e} N/m, k_axial {K[2,2]:.4e} N/m, "
+              f"k_tilt_x {K[3,3]:.4e} N m/rad, k_tilt_y {K[4,4]:.4e} N m/rad"]
+    return "\n".join(lines)
+
+
+def study_text(case, study) -> str:
+    """Extremes of loads and contact angles per study value."""
+    sol = study.solution
+    Qo, Qi = np.asarray(sol.Q_outer), np.asarray(sol.Q_inner)
+    ai, ao = np.asarray(sol.alpha_inner) * RAD2DEG, np.asarray(sol.alpha_outer) * RAD2DEG
+    rows = [(v, Qi[m].max(), Qo[m].max(), ai[m].min(), ai[m].max(), ao[m].min(), ao[m].max())
+            for m, v in enumerate(study.values)]
+    how = "one batch" if study.batched else "one sweep per value"
+    return (f"{case.title}: study of {study.parameter} over {study.values} ({how})\n"
+            + table((study.parameter, "max Q_i N", "max Q_o N", "min a_i", "max a_i", "min a_o", "max a_o"),
+                    rows, ("{:g}", "{:.1f}", "{:.1f}", "{:.2f}", "{:.2f}", "{:.2f}", "{:.2f}")))
+
+
+def compare_text(case, comparison) -> str:
+    """Peaks of the quasi-static sweep and of the dynamic run, with the amplification."""
+    bad = int(np.sum(np.asarray(comparison.quasi_static.result) != 0))
+    head = (f"{case.title}: quasi-static sweep at {len(comparison.indices)} cage angles of the dynamic run "
+            f"({float(comparison.dynamic.time[-1]):.4f} s){'; %d angles did not converge' % bad if bad else ''}")
+    return head + "\n" + table(("quantity", "unit", "quasi-static", "dynamic", "dynamic / static"), comparison.rows,
+                               ("{}", "{}", "{:.3f}", "{:.3f}", "{:.3f}"))
+
+
+def spectrum_text(analysis) -> str:
+    """Sampling, band, the envelope peak near BPFO and its harmonics."""
+    a = analysis
+    bpfo = a.frequencies["bpfo_Hz"]
+    rows = [(k, k * bpfo, fk, ak, (fk - k * bpfo) / (k * bpfo) * 100) for k, fk, ak in a.harmonics]
+    return "\n".join([
+        f"{a.source}: {a.samples} samples at {a.sample_rate:.0f} Hz ({a.duration:.4f} s), "
+        f"band {a.band[0]:.0f}-{a.band[1]:.0f} Hz, resolution {a.spectrum.resolution:.3f} Hz",
+        f"envelope peak near BPFO: {a.peak:.4f} Hz; reported bpfo_Hz {bpfo:.4f} Hz; "
+        f"relative difference {(a.peak - bpfo) / bpfo * 100:+.4f} %",
+        table(("k", "k x bpfo Hz", "measured Hz", "amplitude (m/s^2)^2", "diff %"), rows,
+              ("{}", "{:.3f}", "{:.3f}", "{:.4g}", "{:+.4f}"))])

@@ -1,0 +1,365 @@
+"""Case-driven workflows: what the command line, the notebooks, the README and the tests run.
+
+Each function takes a validated :class:`bearingsim.case.Case` (``load_case("demo")`` or a path)
+and calls the core with *everything* the case says (cage angle, Hertz method, raceway control,
+sweep grid, dynamics settings), so Python and the command line give the same numbers:
+
+============================ =========================================== ======================
+function                     result                                      command
+============================ =========================================== ======================
+:func:`solve_case`           ``JonesSolution``                           ``bearingsim static``
+:func:`sweep_case`           ``JonesSolution`` with a leading (N,) axis  ``bearingsim sweep``
+:func:`study_case`           :class:`Study` (solution (M, N))            ``bearingsim study``
+:func:`simulate_case`        ``DynamicsResult``                          ``bearingsim simulate``
+:func:`compare_case`         :class:`Comparison`                         ``bearingsim compare``
+:func:`dataset_case`         ``DatasetSummary`` (file written)           ``bearingsim dataset``
+:func:`spectrum_file`        :class:`EnvelopeAnalysis`                   ``bearingsim spectrum``
+============================ =========================================== ======================
+
+Errors are the classes of :mod:`bearingsim.errors`: bad input raises ``InputError``; with
+``throw=True`` (the default) a failed solve raises ``NotConvergedError`` naming the case file,
+with ``throw=False`` the result is returned with its codes (per item for batches).  Nothing here
+prints, writes files (except :func:`dataset_case`, whose result is the file) or draws.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .case import unit_of
+from .errors import InputError, NotConvergedError
+
+__all__ = ["solve_case", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
+           "spectrum_file", "envelope_band", "simulation_spectrum", "Study", "Comparison",
+           "EnvelopeAnalysis", "STUDY_CHUNK"]
+
+#: quasi-static states solved together by :func:`study_case` (the last chunk is padded)
+STUDY_CHUNK = 1024
+
+def _code_text(module, code, default_hint: str) -> tuple[str, str]:
+    """(message, hint) of a core result code: from ``module.RESULTS`` (an errors.ResultCode
+    enumeration) when the module has one, else from its ``RESULT_MESSAGES`` table."""
+    code = int(code)
+    codes = getattr(module, "RESULTS", None)
+    if codes is not None:
+        try:
+            member = codes(code)
+            return member.message, member.hint or default_hint
+        except ValueError:
+            pass
+    return getattr(module, "RESULT_MESSAGES", {}).get(code, f"result code {code}"), default_hint
+
+
+def _progress(total, desc, unit, progress):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, disable=None if progress else True, dynamic_ncols=True)
+
+
+def _check(sol, case, what, throw):
+    """With ``throw``, raise NotConvergedError / InvalidStateError for a quasi-static solution
+    (single or batch) with a failed item, naming the case file, the reason and the count."""
+    from .jones import raise_for
+
+    if throw:
+        raise_for(sol, f"{case.source}: {what}")
+    return sol
+
+
+# ------------------------------------------------------------------------------------ solve
+def solve_case(case, *, throw=True):
+    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``)."""
+    import bearingsim as bs
+
+    sol = bs.solve(case.bearing(), case.operation(), case.loads(), cage_angle=case.cage_angle,
+                   spall=case.spall(), hertz_method=case.hertz_method, throw=False)
+    return _check(sol, case, "the quasi-static solve", throw)
+
+
+def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):
+    """Quasi-static states over the case's ``[sweep]`` cage angles (both sides of every
+    rectangular-spall edge inserted unless ``resolve_edges=False``)."""
+    from .sweep import sweep_angles, sweep_chunked
+
+    b, spall = case.bearing(), case.spall()
+    st = case.sweep_settings()
+    angles = sweep_angles(b, spall, st["start"], st["stop"], st["steps"], resolve_edges)
+    bar = _progress(len(angles), "sweep", "angle", progress)
+    try:
+        sol = sweep_chunked(b, case.operation(), case.loads(), spall, angles, progress=bar.update,
+                            hertz_method=case.hertz_method)
+    finally:
+        bar.close()
+    return _check(sol, case, "the cage-angle sweep", throw)
+
+
+# ------------------------------------------------------------------------------------ study
+@dataclass(frozen=True)
+class Study:
+    """Result of :func:`study_case`: one cage-angle sweep per value of ``parameter``.
+
+    ``values`` in the key's unit (``unit``, e.g. "rpm"); ``solution`` a ``JonesSolution`` with
+    leading axes (M values, N cage angles); ``batched``: whether all values were solved as one
+    batch (keys that leave the bearing and the spall unchanged) or one sweep per value."""
+
+    parameter: str
+    values: list
+    unit: str
+    solution: object
+    batched: bool
+
+    @property
+    def converged(self):
+        return np.asarray(self.solution.result) == 0
+
+    def message(self):
+        return self.solution.message()
+
+
+#: study keys that change the shape of the results: no rectangular (M, N, Z) array
+_SHAPE_KEYS = {"bearing.balls": "the number of balls", "sweep.steps": "the number of cage angles"}
+
+
+def _leaves_equal(a, b) -> bool:
+    import jax
+
+    la, ta = jax.tree_util.tree_flatten(a)
+    lb, tb = jax.tree_util.tree_flatten(b)
+    return ta == tb and all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(la, lb))
+
+
+def _study_inputs(c):
+    st = c.sweep_settings()
+    # one uniform grid per value (no edge insertion), so the study is one rectangular array
+    return c.bearing(), c.operation(), c.loads(), c.spall(), np.linspace(st["start"], st["stop"], st["steps"])
+
+
+def _batchable(inputs, cases) -> bool:
+    """All values share the bearing, the spall, the raceway control and the Hertz method: then
+    only loads, speed, the Fc/Mg switches and the cage angles differ, which ``solve_batch`` takes
+    per item."""
+    b0, op0, _, sp0, _ = inputs[0]
+    return (len({c.hertz_method for c in cases}) == 1
+            and all(op.control == op0.control for _, op, _, _, _ in inputs)
+            and all(_leaves_equal(b, b0) and _leaves_equal(sp, sp0) for b, _, _, sp, _ in inputs))
+
+
+def _stack(sols):
+    import jax
+    import jax.numpy as jnp
+
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
+
+
+def _study_batch(inputs, hertz_method, bar):
+    """Every (value, cage angle) state through ``solve_batch`` in chunks of the next power of two
+    (at most :data:`STUDY_CHUNK`), the last one padded, so few batch shapes are ever compiled."""
+    import jax
+    import jax.numpy as jnp
+
+    from .jones import solve_batch
+    from .kinematics import Operation
+
+    b, op0, _, spall, grid = inputs[0]
+    M, N = len(inputs), grid.size
+    per = lambda f: np.repeat(np.asarray([f(x) for x in inputs], float), N, axis=0)  # noqa: E731
+    speed, cf, gy = (per(lambda x, k=k: getattr(x[1], k)) for k in ("speed", "centrifugal", "gyroscopic"))
+    loads = per(lambda x: np.asarray(x[2]))
+    angles = np.concatenate([x[4] for x in inputs])
+    total = M * N
+    chunk = min(1 << max(0, int(total - 1).bit_length()), STUDY_CHUNK)   # a power of two: few shapes
+    parts = []
+    for k in range(0, total, chunk):
+        idx = np.minimum(np.arange(k, k + chunk), total - 1)      # pad the last chunk: one shape
+        op = Operation(speed[idx], op0.control, cf[idx], gy[idx])
+        sol = solve_batch(b, op, loads[idx], cage_angle=angles[idx], spall=spall,
+                          hertz_method=hertz_method)
+        n = min(chunk, total - k)
+        parts.append(jax.tree_util.tree_map(lambda a: a[:n], sol))
+        bar.update(n)
+    flat = jax.tree_util.tree_map(lambda *a: jnp.concatenate(a), *parts)
+    return jax.tree_util.tree_map(lambda a: a.reshape((M, N) + a.shape[1:]), flat)
+
+
+def _study_sweep(x, hertz_method):
+    from .sweep import sweep
+
+    b, op, loads, spall, grid = x
+    return sweep(b, op, loads, spall, angles=grid, hertz_method=hertz_method)
+
+
+def study_case(case, *, throw=True, progress=False) -> Study:
+    """One cage-angle sweep (the case's ``[sweep]`` grid, no edge insertion) per ``[study]`` value.
+
+    Values that change only loads, speed, the Fc/Mg switches or the sweep angles are solved as
+    one batch (``jones.solve_batch`` over every value and angle, in chunks of STUDY_CHUNK states;
+    a value with a state that fails there is redone by continuation); other keys (geometry,
+    material, spall) run one compiled sweep per value.  Raises InputError without ``[study]`` or
+    for a key that changes the shape of the results (``bearing.balls``, ``sweep.steps``)."""
+    spec = case.study_settings()
+    if spec is None:
+        raise InputError(f"{case.source}: no [study] section: add one, e.g.\n[study]\n"
+                         'parameter = "operation.speed_rpm"\nvalues = [0, 5000, 10000]')
+    param, values = spec
+    if param in _SHAPE_KEYS:
+        raise InputError(f"{case.source}: study.parameter = '{param}' changes {_SHAPE_KEYS[param]} "
+                         "and so the shape of every result; run one sweep per value instead")
+    cases = case.study_cases()
+    inputs = [_study_inputs(c) for c in cases]
+    hertz = cases[0].hertz_method
+    batched = _batchable(inputs, cases)
+    total = len(inputs) * inputs[0][4].size
+    bar = _progress(total, f"study {param}", "state", progress)
+    try:
+        if batched:
+            sol = _study_batch(inputs, hertz, bar)
+            for m in np.flatnonzero(np.any(np.asarray(sol.result) != 0, axis=1)):
+                redo = _study_sweep(inputs[m], hertz)
+                sol = _replace_row(sol, int(m), redo)
+        else:
+            rows = []
+            for x, c in zip(inputs, cases):
+                rows.append(_study_sweep(x, c.hertz_method))
+                bar.update(x[4].size)
+            sol = _stack(rows)
+    finally:
+        bar.close()
+    if throw:                                     # raise_for describes a flat batch
+        import jax
+
+        _check(jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), sol), case,
+               f"the study of {param}", throw)
+    return Study(param, list(values), unit_of(param), sol, batched)
+
+
+def _replace_row(sol, m, row):
+    import jax
+
+    return jax.tree_util.tree_map(lambda a, r: a.at[m].set(r), sol, row)
+
+
+# ------------------------------------------------------------------------------- dynamics
+def simulate_case(case, *, throw=True, progress=None, **kw):
+    """The dynamic simulation of the case's ``[dynamics]`` (``bearingsim.dynamics.simulate_case``)."""
+    from . import dynamics
+
+    res = dynamics.simulate_case(case, progress=progress, throw=False, **kw)
+    if throw and int(res.result) != 0:
+        message, hint = _code_text(dynamics, res.result, "loosen [dynamics] rtol/atol or check the "
+                                                          "structural parameters.")
+        raise NotConvergedError(f"{case.source}: the dynamic simulation failed: {message} after "
+                                f"{res.num_steps} steps", hint=hint)
+    return res
+
+
+class Comparison(NamedTuple):
+    """Result of :func:`compare_case`.  ``rows``: (quantity, unit, quasi-static, dynamic,
+    dynamic / quasi-static or NaN where the quasi-static value is ~0)."""
+
+    dynamic: object          # DynamicsResult
+    indices: np.ndarray      # samples of the dynamic run that were compared
+    quasi_static: object     # JonesSolution (len(indices),) at those cage angles
+    rows: list
+
+
+_COMPARED = (("Q_outer", "N", 1.0, 1e-6), ("Q_inner", "N", 1.0, 1e-6),
+             ("alpha_outer", "deg", 180.0 / np.pi, 1e-3), ("alpha_inner", "deg", 180.0 / np.pi, 1e-3))
+
+
+def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
+    """Quasi-static sweep at the cage angles of the dynamic run (subsampled to ``max_angles``)
+    with peak values side by side.  Needs a ``[dynamics]`` section in the case file."""
+    from .sweep import sweep
+
+    if "dynamics" not in case.raw:
+        raise InputError(f"{case.source}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
+    res = simulate_case(case)
+    th = np.asarray(res.cage_angle)
+    idx = np.unique(np.linspace(0, len(th) - 1, min(len(th), max_angles)).astype(int))
+    qs = sweep(case.bearing(), case.operation(), case.loads(), case.spall(), angles=th[idx],
+               hertz_method=case.hertz_method)
+    _check(qs, case, "the quasi-static sweep at the dynamic run's cage angles", throw)
+
+    def ratio(d, s, tol):        # amplification only where the static value is not ~0
+        return d / s if abs(s) > tol else np.nan
+
+    rows = []
+    for name, unit, f, tol in _COMPARED:
+        d = np.asarray(getattr(res, name))[idx] * f
+        s = np.asarray(getattr(qs, name)) * f
+        rows.append((f"max {name}", unit, s.max(), d.max(), ratio(d.max(), s.max(), tol)))
+        if name.startswith("alpha"):
+            rows.append((f"min {name}", unit, s.min(), d.min(), ratio(d.min(), s.min(), tol)))
+    qd = np.asarray(res.ring_displacement)[idx] * 1e6
+    qq = np.asarray(qs.displacement)[:, :3] * 1e6
+    for j, lab in enumerate(("x", "y", "axial")):
+        amp_s, amp_d = np.ptp(qq[:, j]), np.ptp(qd[:, j])
+        rows.append((f"peak-to-peak ring {lab}", "um", amp_s, amp_d, ratio(amp_d, amp_s, 1e-6)))
+    return Comparison(res, idx, qs, rows)
+
+
+def dataset_case(case, path, *, throw=True, progress=False):
+    """Simulate the case's ``[dataset]`` into ``path`` (HDF5; ``dataset.make_dataset``).  Items
+    that failed are in the file with a zero signal and a code; ``throw`` raises after writing."""
+    from .dataset import make_dataset
+
+    summary = make_dataset(case, path, progress=progress)
+    if throw and summary.failed:
+        raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
+                                f"set failed (written to {path} with labels/result != 0)")
+    return summary
+
+
+# ------------------------------------------------------------------------------- spectra
+def envelope_band(sample_rate, resonance_hz):
+    """Demodulation band around the structural resonance (kept below 0.45 x the sample rate)."""
+    from .signal import select_band
+
+    return select_band(np.zeros(16), sample_rate, resonance_hz=min(resonance_hz, 0.45 * sample_rate))
+
+
+def simulation_spectrum(res, case):
+    """Squared-envelope spectrum of a simulation's sensor signal, in the case's resonance band."""
+    from .signal import envelope_spectrum
+
+    d = case.dynamics_settings()
+    return envelope_spectrum(np.asarray(res.sensor_acceleration), d["sample_rate"],
+                             band=envelope_band(d["sample_rate"], d["resonance_frequency"]))
+
+
+class EnvelopeAnalysis(NamedTuple):
+    """Result of :func:`spectrum_file` (frequencies in Hz)."""
+
+    source: str
+    samples: int
+    sample_rate: float
+    duration: float           # s
+    band: tuple
+    spectrum: object          # signal.EnvelopeSpectrum
+    frequencies: dict         # shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz of the simulation
+    peak: float               # envelope peak near BPFO
+    harmonics: list           # (k, measured Hz, amplitude) of k x BPFO
+
+
+def spectrum_file(path, *, resonance_hz=3000.0) -> EnvelopeAnalysis:
+    """Envelope analysis of a ``bearingsim simulate`` output: the peak near BPFO and its
+    harmonics.  The band is centred on the stored case's resonance (else ``resonance_hz``)."""
+    from .io import read_simulation
+    from .signal import envelope_spectrum, harmonic_peaks, peak_frequency
+
+    sim = read_simulation(path)
+    t, a, fr = sim["time"], sim["sensor_acceleration"], sim["frequencies"]
+    fs = 1.0 / float(t[1] - t[0])
+    if sim["case"] is not None:
+        resonance_hz = sim["case"].dynamics_settings()["resonance_frequency"]
+    band = envelope_band(fs, resonance_hz)
+    es = envelope_spectrum(a, fs, band=band)
+    bpfo = fr["bpfo_Hz"]
+    try:
+        fp = peak_frequency(es, bpfo, rel_window=0.05)
+    except ValueError as e:
+        raise NotConvergedError(f"{path}: no envelope peak near BPFO {bpfo:.3f} Hz: {e}") from None
+    return EnvelopeAnalysis(str(path), t.size, fs, float(t[-1] - t[0]) + 1.0 / fs, band, es, fr, fp,
+                            harmonic_peaks(es, bpfo, n=5, rel_window=0.03))
