@@ -16,6 +16,7 @@ import numpy as np
 
 from . import io, report, workflows
 from .case import load_case
+from .case.units import from_si
 from .errors import BearingsimError, OutputError
 
 
@@ -68,7 +69,7 @@ def _sweep(case, output, plot_dir):
     sol = workflows.sweep_case(case, throw=False, progress=True)
     _warn_failures(sol.result, "cage angles")
     io.write_sweep(output, case, sol)
-    th = np.degrees(np.asarray(sol.cage_angle))
+    th = from_si(np.asarray(sol.cage_angle), "deg")
     Qo = np.asarray(sol.Q_outer)
     print(f"{case.title}: {len(th)} cage angles from {th[0]:.3f} to {th[-1]:.3f} deg, "
           f"max Q_o {Qo.max():.1f} N, min Q_o {Qo.min():.1f} N")

@@ -29,6 +29,8 @@ import numpy as np
 
 from . import dynamics
 from ._version import __version__
+from .case import check_sampling
+from .case.units import from_si, to_si
 from .errors import InputError, ResultCode
 
 __all__ = ["LABEL_FIELDS", "DatasetResult", "DatasetSummary", "draw_labels", "make_dataset",
@@ -167,7 +169,7 @@ def _ball_iterations(case, lab, extent, depth, profile):
     for i in {int(np.argmax(lab["speed_rpm"])), int(np.argmax(lab["radial_N"] + lab["axial_N"]))}:
         op = Operation.from_rpm(float(lab["speed_rpm"][i]), o["raceway_control"], True, True)
         F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
-        sp = Spall(float(np.radians(lab["spall_center_deg"][i])), float(extent[i]), float(depth[i]), profile)
+        sp = Spall(float(to_si(lab["spall_center_deg"][i], "deg")), float(extent[i]), float(depth[i]), profile)
         sol = solve(b, op, F, cage_angle=case.cage_angle, spall=sp, hertz_method=case.hertz_method,
                     throw=False)
         if int(sol.result) != 0:
@@ -190,6 +192,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     from .dynamics import DynamicsParameters, _time_grid, simulate_batch
 
     ds = _settings(case)
+    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
     d = case.dynamics_settings()
     b = case.bearing()
     Z = b.n_balls
@@ -211,10 +214,10 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     # healthy items: depth 0 (that is what healthy means to the model) over a spall of the
     # largest length of the range, so that the step limit of the chunk (a quarter of the time
     # a ball takes to cross its shortest spall) is not driven to zero
-    sim_len = np.where(lab["healthy"], float(ds["spall_length_mm"][1]), lab["spall_length_mm"]) * 1e-3
+    sim_len = to_si(np.where(lab["healthy"], float(ds["spall_length_mm"][1]), lab["spall_length_mm"]), "mm")
     extent = sim_len / R_o
-    depth = lab["spall_depth_mm"] * 1e-3
-    center = np.radians(lab["spall_center_deg"])
+    depth = to_si(lab["spall_depth_mm"], "mm")
+    center = to_si(lab["spall_center_deg"], "deg")
     loads = np.zeros((n, 5))
     loads[:, 0] = lab["radial_N"]
     loads[:, 2] = lab["axial_N"]
@@ -265,7 +268,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
                     lab["result"][idx] = code
                     lab["bpfo_Hz"][idx] = bpfo
                     lab["ftf_Hz"][idx] = bpfo / Z
-                    lab["shaft_Hz"][idx] = lab["speed_rpm"][idx] / 60.0
+                    lab["shaft_Hz"][idx] = from_si(to_si(lab["speed_rpm"][idx], "rpm"), "rev_s")
                     for j, i in enumerate(idx):       # rows out of order; one (1, T) chunk each
                         sig[i] = a[j]
                     failed += int(np.sum(~ok))

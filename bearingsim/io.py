@@ -15,9 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from .case.units import from_si
 from .errors import BearingsimError, OutputError
-
-RAD2DEG = 180.0 / np.pi
 
 
 class NonFiniteOutputError(OutputError):
@@ -56,6 +55,16 @@ def atomic_path(path):
         raise
 
 
+#: the ring displacement [x, y, axial, tilt_x, tilt_y] with the unit each is reported in
+RING_DOFS = (("x", "um"), ("y", "um"), ("axial", "um"), ("tilt_x", "mrad"), ("tilt_y", "mrad"))
+
+#: per-ball results of the static JSON: (JonesSolution field, unit); the key is "<field>_<unit>"
+STATIC_BALL_FIELDS = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer", "deg"), ("Q_inner", "N"),
+                      ("Q_outer", "N"), ("delta_inner", "um"), ("delta_outer", "um"), ("centrifugal", "N"),
+                      ("gyroscopic_moment", "Nm"), ("p_max_inner", "MPa"), ("p_max_outer", "MPa"),
+                      ("orbital_speed", "rpm"), ("spall_depth", "um"))
+
+
 def static_to_dict(sol, bearing=None) -> dict:
     """The fixed JSON interface of ``bearingsim static`` (units in the key names; stiffness SI)."""
     q = np.asarray(sol.displacement)
@@ -66,26 +75,12 @@ def static_to_dict(sol, bearing=None) -> dict:
         "iterations": int(sol.iterations),
         "residual_norm": float(sol.residual_norm),
         "residual_norm_units": "N (moments divided by R_i)",
-        "ring_displacement": {"x_um": q[0] * 1e6, "y_um": q[1] * 1e6, "axial_um": q[2] * 1e6,
-                              "tilt_x_mrad": q[3] * 1e3, "tilt_y_mrad": q[4] * 1e3},
-        "cage_speed_rpm": float(sol.cage_speed) * 60.0 / (2.0 * np.pi),
+        "ring_displacement": {f"{name}_{unit}": from_si(v, unit) for (name, unit), v in zip(RING_DOFS, q)},
+        "cage_speed_rpm": from_si(float(sol.cage_speed), "rpm"),
         "loads": dict(zip(["radial_x_N", "radial_y_N", "axial_N", "moment_x_Nm", "moment_y_Nm"],
                           np.asarray(sol.loads).tolist())),
-        "balls": {
-            "azimuth_deg": np.asarray(sol.azimuth) * RAD2DEG,
-            "alpha_inner_deg": np.asarray(sol.alpha_inner) * RAD2DEG,
-            "alpha_outer_deg": np.asarray(sol.alpha_outer) * RAD2DEG,
-            "Q_inner_N": np.asarray(sol.Q_inner),
-            "Q_outer_N": np.asarray(sol.Q_outer),
-            "delta_inner_um": np.asarray(sol.delta_inner) * 1e6,
-            "delta_outer_um": np.asarray(sol.delta_outer) * 1e6,
-            "centrifugal_N": np.asarray(sol.centrifugal),
-            "gyroscopic_moment_Nm": np.asarray(sol.gyroscopic_moment),
-            "p_max_inner_MPa": np.asarray(sol.p_max_inner) * 1e-6,
-            "p_max_outer_MPa": np.asarray(sol.p_max_outer) * 1e-6,
-            "orbital_speed_rpm": np.asarray(sol.orbital_speed) * 60.0 / (2.0 * np.pi),
-            "spall_depth_um": np.asarray(sol.spall_depth) * 1e6,
-        },
+        "balls": {f"{field}_{unit}": from_si(np.asarray(getattr(sol, field)), unit)
+                  for field, unit in STATIC_BALL_FIELDS},
         "stiffness": {
             "dofs": ["x", "y", "axial", "tilt_x", "tilt_y"],
             "units": "N/m (force/translation), N/rad (force/tilt), N m/m (moment/translation), "

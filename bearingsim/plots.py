@@ -4,7 +4,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-RAD2DEG = 180.0 / np.pi
+from .case.units import from_si
+
 C_IN, C_OUT = "#1f77b4", "#d62728"
 
 
@@ -40,7 +41,7 @@ def _shade_polar(ax, span, rmax):
 def _shade_azimuth(ax, span, label=True):
     if span is None:
         return
-    lo, hi = np.rad2deg(span[0]) % 360.0, np.rad2deg(span[1]) % 360.0
+    lo, hi = from_si(span[0], "deg") % 360.0, from_si(span[1], "deg") % 360.0
     kw = dict(color="0.55", alpha=0.3, lw=0)
     if hi < lo:   # straddles 0 deg
         ax.axvspan(lo, 360.0, label="spall" if label else None, **kw)
@@ -66,11 +67,13 @@ def polar_loads(ax, sol, spall=None, title="Ball loads"):
 
 
 def contact_angles(ax, sol, spall=None):
-    psi = np.mod(np.asarray(sol.azimuth), 2 * np.pi) * RAD2DEG
+    psi = from_si(np.mod(np.asarray(sol.azimuth), 2 * np.pi), "deg")
     order = np.argsort(psi)
     _shade_azimuth(ax, _spall_span(spall))
-    ax.plot(psi[order], np.asarray(sol.alpha_inner)[order] * RAD2DEG, "-s", color=C_IN, ms=4, label=r"$\alpha_i$ inner")
-    ax.plot(psi[order], np.asarray(sol.alpha_outer)[order] * RAD2DEG, "-o", color=C_OUT, ms=4, label=r"$\alpha_o$ outer")
+    ax.plot(psi[order], from_si(np.asarray(sol.alpha_inner)[order], "deg"), "-s", color=C_IN, ms=4,
+            label=r"$\alpha_i$ inner")
+    ax.plot(psi[order], from_si(np.asarray(sol.alpha_outer)[order], "deg"), "-o", color=C_OUT, ms=4,
+            label=r"$\alpha_o$ outer")
     ax.set_xlim(0, 360)
     ax.set_xticks(np.arange(0, 361, 45))
     ax.set_xlabel("ball azimuth ψ (deg)")
@@ -87,16 +90,18 @@ def plot_static(sol, title="", spall=None, path=None):
     polar_loads(axp, sol, spall)
     ax = fig.add_subplot(gs[0, 2:])
     contact_angles(ax, sol, spall)
-    q = np.asarray(sol.displacement)
-    rpm = float(sol.cage_speed) * 60 / (2 * np.pi)
-    ax.set_title(f"ring: x {q[0]*1e6:.2f} µm, y {q[1]*1e6:.2f} µm, axial {q[2]*1e6:.2f} µm, "
-                 f"tilt {q[3]*1e3:.3f}/{q[4]*1e3:.3f} mrad; cage {rpm:.0f} rpm", fontsize=9)
+    x, y, z = from_si(np.asarray(sol.displacement[:3]), "um")
+    tx, ty = from_si(np.asarray(sol.displacement[3:]), "mrad")
+    rpm = from_si(float(sol.cage_speed), "rpm")
+    ax.set_title(f"ring: x {x:.2f} µm, y {y:.2f} µm, axial {z:.2f} µm, "
+                 f"tilt {tx:.3f}/{ty:.3f} mrad; cage {rpm:.0f} rpm", fontsize=9)
     return _finish(fig, title, path, dpi=130)
 
 
 # ------------------------------------------------------------------------------- sweeps
-_QUANTITIES = [("alpha_inner", r"$\alpha_i$ (deg)", RAD2DEG), ("alpha_outer", r"$\alpha_o$ (deg)", RAD2DEG),
-               ("Q_inner", r"$Q_i$ (N)", 1.0), ("Q_outer", r"$Q_o$ (N)", 1.0)]
+#: (JonesSolution field, axis label, unit of the axis)
+_QUANTITIES = [("alpha_inner", r"$\alpha_i$ (deg)", "deg"), ("alpha_outer", r"$\alpha_o$ (deg)", "deg"),
+               ("Q_inner", r"$Q_i$ (N)", "N"), ("Q_outer", r"$Q_o$ (N)", "N")]
 
 
 def _take(sol, n):
@@ -115,7 +120,7 @@ def spall_traces(sweep_sol, center=0.0):
     near = np.argmin(np.abs(u_all), axis=1)
     Z = psi.shape[1]
     n = np.arange(psi.shape[0])
-    u = u_all[n, near] * RAD2DEG
+    u = from_si(u_all[n, near], "deg")
     order = np.argsort(u, kind="stable")
     out = {}
     for name, _, _ in _QUANTITIES:
@@ -136,28 +141,29 @@ def plot_sweep(sweep_sol, title="", spall=None, path=None):
     fig = plt.figure(figsize=(13, 8.5), constrained_layout=True)
     gs = fig.add_gridspec(3, 3)
     u, tr, ok = spall_traces(sweep_sol, _center(spall))
-    half = None if spall is None else 0.5 * float(spall.extent) * RAD2DEG
+    half = None if spall is None else from_si(0.5 * float(spall.extent), "deg")
     styles = [("trailing neighbour", "--", "0.45"), ("ball over the spall", "-", None), ("leading neighbour", ":", "0.2")]
-    for k, (name, label, f) in enumerate(_QUANTITIES):
+    for k, (name, label, unit) in enumerate(_QUANTITIES):
         ax = fig.add_subplot(gs[k // 2, k % 2])
         if half is not None and float(spall.depth) > 0:
             ax.axvspan(-half, half, color="0.55", alpha=0.3, lw=0, label="spall")
         col = C_IN if "inner" in name else C_OUT
         for i, (lab, ls, c) in enumerate(styles):
-            ax.plot(u[ok], tr[name][ok, i] * f, ls, color=c or col, lw=1.5 if i == 1 else 1.1, label=lab)
+            ax.plot(u[ok], from_si(tr[name][ok, i], unit), ls, color=c or col, lw=1.5 if i == 1 else 1.1,
+                    label=lab)
         ax.set_xlabel("ball position relative to the spall centre (deg)")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         if k == 0:
             ax.legend(fontsize=8)
-    th = np.asarray(sweep_sol.cage_angle) * RAD2DEG
+    th = from_si(np.asarray(sweep_sol.cage_angle), "deg")
     q = np.asarray(sweep_sol.displacement)
     ax = fig.add_subplot(gs[2, :2])
     for j, lab in enumerate(["x", "y", "axial"]):
-        ax.plot(th, q[:, j] * 1e6, label=f"{lab} (µm)")
+        ax.plot(th, from_si(q[:, j], "um"), label=f"{lab} (µm)")
     ax2 = ax.twinx()
-    ax2.plot(th, q[:, 3] * 1e3, ":", color="0.3", label="tilt x (mrad)")
-    ax2.plot(th, q[:, 4] * 1e3, "--", color="0.5", label="tilt y (mrad)")
+    ax2.plot(th, from_si(q[:, 3], "mrad"), ":", color="0.3", label="tilt x (mrad)")
+    ax2.plot(th, from_si(q[:, 4], "mrad"), "--", color="0.5", label="tilt y (mrad)")
     ax2.set_ylabel("tilt (mrad)")
     ax.set_xlabel("cage angle θ_c (deg)")
     ax.set_ylabel("ring displacement (µm)")
@@ -174,7 +180,7 @@ def plot_sweep(sweep_sol, title="", spall=None, path=None):
     axp = fig.add_subplot(gs[:2, 2], projection="polar")
     polar_loads(axp, _take(sweep_sol, n), spall, title=f"Ball loads, θ_c = {th[n]:.2f}°")
     axc = fig.add_subplot(gs[2, 2])
-    axc.plot(th, np.asarray(sweep_sol.cage_speed) * 60 / (2 * np.pi), color="k")
+    axc.plot(th, from_si(np.asarray(sweep_sol.cage_speed), "rpm"), color="k")
     axc.set_xlabel("cage angle θ_c (deg)")
     axc.set_ylabel("mean orbital (cage) speed (rpm)")
     axc.grid(alpha=0.3)
@@ -206,16 +212,16 @@ def plot_study(study_sols, values, parameter, unit_label="", title="", spall=Non
         az = np.mod(np.asarray(one.azimuth), 2 * np.pi)
         order = np.argsort(az)
         lab = f"{v:g} {unit_label}".strip()
-        for ax, (name, label, f) in zip(axes, _QUANTITIES):
-            ax.plot(az[order] * RAD2DEG, np.asarray(getattr(one, name))[order] * f, "-o", ms=3.5,
-                    color=c, lw=1.3, label=lab)
+        for ax, (name, label, unit) in zip(axes, _QUANTITIES):
+            ax.plot(from_si(az[order], "deg"), from_si(np.asarray(getattr(one, name))[order], unit), "-o",
+                    ms=3.5, color=c, lw=1.3, label=lab)
         Qo = np.asarray(one.Q_outer)[order]
         rmax = max(rmax, float(Qo.max()))
         axp.plot(_closed(az[order]), _closed(Qo), "-o", ms=3, color=c, lw=1.2)
         u, tr, ok = spall_traces(s, _center(spall))
         axt.plot(u[ok], tr["Q_outer"][ok, 1], color=c, lw=1.4, label=lab)
         axt.plot(u[ok], tr["Q_inner"][ok, 1], "--", color=c, lw=1.0)
-    for ax, (name, label, f) in zip(axes, _QUANTITIES):
+    for ax, (name, label, _) in zip(axes, _QUANTITIES):
         _shade_azimuth(ax, span, label=False)
         ax.set_xlim(0, 360)
         ax.set_xticks(np.arange(0, 361, 45))
@@ -225,7 +231,7 @@ def plot_study(study_sols, values, parameter, unit_label="", title="", spall=Non
     axes[0].legend(title=parameter, fontsize=8, title_fontsize=8)
     if span is not None:
         axp.fill_between(np.linspace(span[0], span[1], 30), 0, rmax * 1.1, color="0.55", alpha=0.3, lw=0)
-        half = 0.5 * float(spall.extent) * RAD2DEG
+        half = from_si(0.5 * float(spall.extent), "deg")
         axt.axvspan(-half, half, color="0.55", alpha=0.3, lw=0)
     axp.set_ylim(0, rmax * 1.1)
     axp.set_title("$Q_o$ (N), a ball at the spall centre", pad=14)
@@ -278,9 +284,9 @@ def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=No
     fig, ax = plt.subplots(figsize=(10, 4), constrained_layout=True)
     Qo = np.asarray(res.Q_outer)
     for j in _balls_over_spall(res, bearing, spall):
-        ax.plot(t * 1e3, Qo[:, j], lw=0.8, label=f"ball {j}")
+        ax.plot(from_si(t, "ms"), Qo[:, j], lw=0.8, label=f"ball {j}")
     for tm in passes[:30]:
-        ax.axvline(tm * 1e3, color="#d62728", ls=":", lw=0.8)
+        ax.axvline(from_si(tm, "ms"), color="#d62728", ls=":", lw=0.8)
     ax.set_xlabel("time (ms)")
     ax.set_ylabel("outer contact load Q_o (N)")
     ax.set_title(f"{title}: outer loads of the balls that pass the spall")
@@ -302,22 +308,21 @@ def plot_compare(comparison, title="", path=None):
     :class:`bearingsim.workflows.Comparison`): Q_o, Q_i, alpha_o of the ball whose load varies
     most, and the ring displacement, against the cage angle."""
     res, idx, qs = comparison.dynamic, comparison.indices, comparison.quasi_static
-    th = np.unwrap(np.asarray(res.cage_angle)) * RAD2DEG
+    th = from_si(np.unwrap(np.asarray(res.cage_angle)), "deg")
     j = int(np.argmax(np.ptp(np.asarray(res.Q_outer)[idx], axis=0)))
     fig, axes = plt.subplots(2, 2, figsize=(13, 7.5), constrained_layout=True)
-    for ax, (name, lab, f) in zip(axes.ravel()[:3], (("Q_outer", "$Q_o$ (N)", 1.0), ("Q_inner", "$Q_i$ (N)", 1.0),
-                                                      ("alpha_outer", r"$\alpha_o$ (deg)", RAD2DEG))):
-        ax.plot(th, np.asarray(getattr(res, name))[:, j] * f, lw=0.9, label=f"dynamic, ball {j}")
-        ax.plot(th[idx], np.asarray(getattr(qs, name))[:, j] * f, ".", ms=3, label="quasi-static sweep")
+    for ax, (name, lab, unit) in zip(axes.ravel()[:3], (_QUANTITIES[3], _QUANTITIES[2], _QUANTITIES[1])):
+        ax.plot(th, from_si(np.asarray(getattr(res, name))[:, j], unit), lw=0.9, label=f"dynamic, ball {j}")
+        ax.plot(th[idx], from_si(np.asarray(getattr(qs, name))[:, j], unit), ".", ms=3, label="quasi-static sweep")
         ax.set_xlabel("cage angle θ_c (deg)")
         ax.set_ylabel(lab)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     ax = axes[1, 1]
-    qd = np.asarray(res.ring_displacement) * 1e6
+    qd = from_si(np.asarray(res.ring_displacement), "um")
     for k, lab in enumerate(("x", "y", "axial")):
         line, = ax.plot(th, qd[:, k], lw=0.9, label=f"{lab} dynamic")
-        ax.plot(th[idx], np.asarray(qs.displacement)[:, k] * 1e6, ".", ms=3, color=line.get_color(),
+        ax.plot(th[idx], from_si(np.asarray(qs.displacement)[:, k], "um"), ".", ms=3, color=line.get_color(),
                 label=f"{lab} quasi-static")
     ax.set_xlabel("cage angle θ_c (deg)")
     ax.set_ylabel("ring displacement (µm)")

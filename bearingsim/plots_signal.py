@@ -12,7 +12,8 @@ import matplotlib.pyplot as plt
 import matplotlib.transforms as mtransforms
 import numpy as np
 
-from .signal import EnvelopeSpectrum, Spectrum, _check_signal, defect_markers  # noqa: E402
+from .case.units import from_si
+from .signal import EnvelopeSpectrum, Spectrum, defect_markers
 
 __all__ = ["plot_envelope_spectrum", "plot_time_history"]
 
@@ -23,6 +24,13 @@ _OTHER = ["#ff7f0e", "#17becf", "#e377c2", "#bcbd22", "#7f7f7f"]
 _HARM = re.compile(r"^(\d+)\s*[x×*]\s*(.+)$")
 _DPI = 120
 _MAX_LINES = 30    # event marks drawn as full-height lines up to this many in view
+
+
+def _as_signal(x, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be a 1-D array of at least 2 finite samples, got shape {a.shape}")
+    return a
 
 
 def _family(label: str) -> tuple[str, int]:
@@ -120,8 +128,8 @@ def plot_time_history(t, x, marks=None, title: str = "", path=None, ax=None, zoo
             more as a row of small ticks along the top edge (keeps long records readable).
     The time axis is shown in ms when the visible span is shorter than 0.1 s.
     """
-    t = _check_signal(t, "t")
-    x = _check_signal(x, "x")
+    t = _as_signal(t, "t")
+    x = _as_signal(x, "x")
     if t.size != x.size:
         raise ValueError(f"t and x must have the same length, got {t.size} and {x.size}")
     if zoom is not None:
@@ -134,7 +142,8 @@ def plot_time_history(t, x, marks=None, title: str = "", path=None, ax=None, zoo
         t, x = t[sel], x[sel]
     else:
         t0, t1 = float(t[0]), float(t[-1])
-    scale, tunit = (1e3, "ms") if (t1 - t0) < 0.1 else (1.0, "s")
+    tunit = "ms" if (t1 - t0) < 0.1 else "s"
+    scale = from_si(1.0, tunit)
 
     fig, ax = _new_axes(ax, (10, 3.8))
     ax.plot(t * scale, x, color="#1f77b4", lw=0.6, label="signal")

@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["table", "info_text", "static_text", "study_text", "compare_text", "spectrum_text"]
+from .case.units import from_si, label
+from .io import RING_DOFS
 
-RAD2DEG = 180.0 / np.pi
+__all__ = ["table", "quantity", "info_text", "static_text", "study_text", "compare_text", "spectrum_text"]
+
 
 
 def table(headers, rows, fmts) -> str:
@@ -20,6 +22,11 @@ def table(headers, rows, fmts) -> str:
     for k in range(len(rows)):
         lines.append("  ".join(c[k + 1].rjust(wi) for c, wi in zip(cols, w)))
     return "\n".join(lines)
+
+
+def quantity(value, unit: str, fmt: str = ".4f") -> str:
+    """An SI value shown in ``unit`` with its label: ``quantity(0.022225, "mm")`` -> "22.2250 mm"."""
+    return f"{from_si(float(value), unit):{fmt}} {label(unit)}"
 
 
 def _pairs(rows) -> list[str]:
@@ -36,44 +43,45 @@ def info_text(case) -> str:
     out = [f"{case.title}", "=" * len(case.title), "", "Geometry"]
     out += _pairs([
         ("balls Z", f"{b.n_balls}"),
-        ("ball diameter D", f"{float(b.ball_diameter)*1e3:.4f} mm"),
-        ("pitch diameter d_m", f"{float(b.pitch_diameter)*1e3:.4f} mm"),
+        ("ball diameter D", quantity(b.ball_diameter, "mm")),
+        ("pitch diameter d_m", quantity(b.pitch_diameter, "mm")),
         ("groove curvature f_i / f_o", f"{float(b.f_inner):.4f} / {float(b.f_outer):.4f}"),
         ("total conformity B", f"{float(b.B):.4f}"),
-        ("groove-centre distance A = BD", f"{float(b.A)*1e3:.4f} mm"),
-        ("free contact angle alpha_0", f"{a0*RAD2DEG:.3f} deg"),
-        ("diametral clearance P_d", f"{float(b.diametral_clearance)*1e3:.4f} mm"),
-        ("inner groove-centre radius R_i", f"{float(b.inner_groove_radius)*1e3:.4f} mm"),
-        ("outer raceway radius R_o", f"{float(b.outer_raceway_radius)*1e3:.4f} mm"),
-        ("ball mass m / inertia J", f"{float(b.ball_mass)*1e3:.3f} g / {float(b.ball_inertia):.4e} kg m^2"),
-        ("effective modulus E'", f"{float(b.effective_modulus)/1e9:.2f} GPa"),
+        ("groove-centre distance A = BD", quantity(b.A, "mm")),
+        ("free contact angle alpha_0", quantity(a0, "deg", ".3f")),
+        ("diametral clearance P_d", quantity(b.diametral_clearance, "mm")),
+        ("inner groove-centre radius R_i", quantity(b.inner_groove_radius, "mm")),
+        ("outer raceway radius R_o", quantity(b.outer_raceway_radius, "mm")),
+        ("ball mass m / inertia J", f"{quantity(b.ball_mass, 'g', '.3f')} / {float(b.ball_inertia):.4e} kg m^2"),
+        ("effective modulus E'", quantity(b.effective_modulus, "GPa", ".2f")),
     ])
     out += ["", f"Hertz point contact at alpha_0 ({case.hertz_method})"]
     rows = []
     for name, inner in (("inner", True), ("outer", False)):
         c = bs.hertz_contact(b, a0, inner, case.hertz_method)
-        rows.append((name, float(c.sum_rho) / 1e3, float(c.F_rho), float(c.kappa), float(c.K_ell),
-                     float(c.E_ell), float(c.K) / 1e3 ** 1.5))
+        rows.append((name, from_si(float(c.sum_rho), "per_mm"), float(c.F_rho), float(c.kappa), float(c.K_ell),
+                     float(c.E_ell), from_si(float(c.K), "N_per_mm1_5")))
     out.append(table(("contact", "sum_rho (1/mm)", "F(rho)", "kappa", "K(e)", "E(e)", "K (N/mm^1.5)"), rows,
                      ("{}", "{:.5f}", "{:.5f}", "{:.4f}", "{:.5f}", "{:.5f}", "{:.5g}")))
-    n = float(op.speed_rpm)
+    n = from_si(float(op.speed), "rpm")
     kin = bs.ball_kinematics(b, op, a0, a0)
     out += ["", f"Kinematics at alpha_0, {n:.1f} rpm, {op.control} raceway control"]
-    out += _pairs([("orbital (cage) speed", f"{float(kin.orbital_speed)*60/(2*np.pi):.2f} rpm"),
-                   ("ball spin speed", f"{float(kin.spin_speed)*60/(2*np.pi):.2f} rpm"),
-                   ("spin-axis pitch beta", f"{float(kin.beta)*RAD2DEG:.3f} deg"),
+    out += _pairs([("orbital (cage) speed", quantity(kin.orbital_speed, "rpm", ".2f")),
+                   ("ball spin speed", quantity(kin.spin_speed, "rpm", ".2f")),
+                   ("spin-axis pitch beta", quantity(kin.beta, "deg", ".3f")),
                    ("centrifugal force F_c", f"{float(kin.centrifugal):.3f} N"),
                    ("gyroscopic moment M_g", f"{float(kin.gyroscopic):.5f} N m")])
-    f = bs.defect_frequencies(b, n / 60.0, a0)
+    shaft = from_si(float(op.speed), "rev_s")
+    f = bs.defect_frequencies(b, shaft, a0)
     per_hz = bs.defect_frequencies(b, 1.0, a0)          # multiples of the shaft frequency
-    out += ["", f"Defect frequencies at alpha_0 (shaft {n/60:.3f} Hz); BSF once per ball revolution"]
+    out += ["", f"Defect frequencies at alpha_0 (shaft {shaft:.3f} Hz); BSF once per ball revolution"]
     for name, field in (("FTF", "ftf"), ("BPFO", "bpfo"), ("BPFI", "bpfi"), ("BSF", "bsf"), ("2 BSF", "two_bsf")):
         out.append(f"  {name:<6} {float(getattr(f, field)):10.3f} Hz   {float(getattr(per_hz, field)):.5f} x shaft")
     sp = case.spall()
     if sp is not None:
         out += ["", "Spall on the outer raceway",
-                f"  centre {float(sp.center)*RAD2DEG:.2f} deg, extent {float(sp.extent)*RAD2DEG:.3f} deg "
-                f"(arc {float(sp.length(b))*1e3:.3f} mm), depth {float(sp.depth)*1e3:.3f} mm, {sp.profile}"]
+                f"  centre {quantity(sp.center, 'deg', '.2f')}, extent {quantity(sp.extent, 'deg', '.3f')} "
+                f"(arc {quantity(sp.length(b), 'mm', '.3f')}), depth {quantity(sp.depth, 'mm', '.3f')}, {sp.profile}"]
     return "\n".join(out)
 
 
@@ -83,15 +91,15 @@ def static_text(case, sol) -> str:
     K = np.asarray(sol.stiffness)
     lines = [f"{case.title}",
              f"converged in {int(sol.iterations)} iterations, ring residual {float(sol.residual_norm):.2e} N",
-             f"ring displacement: x {q[0]*1e6:.4f} um, y {q[1]*1e6:.4f} um, axial {q[2]*1e6:.4f} um, "
-             f"tilt_x {q[3]*1e3:.5f} mrad, tilt_y {q[4]*1e3:.5f} mrad",
-             f"cage speed {float(sol.cage_speed)*60/(2*np.pi):.2f} rpm", ""]
-    rows = [(j, float(np.mod(sol.azimuth[j], 2 * np.pi)) * RAD2DEG, float(sol.alpha_inner[j]) * RAD2DEG,
-             float(sol.alpha_outer[j]) * RAD2DEG, float(sol.Q_inner[j]), float(sol.Q_outer[j]),
-             float(sol.delta_inner[j]) * 1e6, float(sol.delta_outer[j]) * 1e6,
-             float(sol.centrifugal[j]), float(sol.gyroscopic_moment[j]),
-             float(sol.p_max_inner[j]) * 1e-6, float(sol.p_max_outer[j]) * 1e-6)
-            for j in range(sol.azimuth.shape[0])]
+             "ring displacement: " + ", ".join(f"{name} {quantity(v, unit, '.4f' if unit == 'um' else '.5f')}"
+                                               for (name, unit), v in zip(RING_DOFS, q)),
+             f"cage speed {quantity(sol.cage_speed, 'rpm', '.2f')}", ""]
+    columns = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer", "deg"), ("Q_inner", "N"),
+               ("Q_outer", "N"), ("delta_inner", "um"), ("delta_outer", "um"), ("centrifugal", "N"),
+               ("gyroscopic_moment", "Nm"), ("p_max_inner", "MPa"), ("p_max_outer", "MPa"))
+    values = [from_si(np.asarray(getattr(sol, name)), unit) for name, unit in columns]
+    values[0] = np.mod(values[0], 360.0)
+    rows = [(j, *(float(v[j]) for v in values)) for j in range(sol.azimuth.shape[0])]
     lines.append(table(("ball", "psi deg", "a_i deg", "a_o deg", "Q_i N", "Q_o N", "d_i um", "d_o um", "F_c N",
                         "M_g N m", "p_i MPa", "p_o MPa"), rows,
                        ("{}", "{:.2f}", "{:.3f}", "{:.3f}", "{:.1f}", "{:.1f}", "{:.3f}", "{:.3f}", "{:.2f}",
@@ -106,7 +114,7 @@ def study_text(case, study) -> str:
     """Extremes of loads and contact angles per study value."""
     sol = study.solution
     Qo, Qi = np.asarray(sol.Q_outer), np.asarray(sol.Q_inner)
-    ai, ao = np.asarray(sol.alpha_inner) * RAD2DEG, np.asarray(sol.alpha_outer) * RAD2DEG
+    ai, ao = from_si(np.asarray(sol.alpha_inner), "deg"), from_si(np.asarray(sol.alpha_outer), "deg")
     rows = [(v, Qi[m].max(), Qo[m].max(), ai[m].min(), ai[m].max(), ao[m].min(), ao[m].max())
             for m, v in enumerate(study.values)]
     how = "one batch" if study.batched else "one sweep per value"

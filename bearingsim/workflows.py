@@ -28,7 +28,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .case import unit_of
+from .case import check_sampling, unit_of
+from .case.units import from_si
 from .errors import InputError, NotConvergedError
 
 __all__ = ["solve_case", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
@@ -242,9 +243,12 @@ def _replace_row(sol, m, row):
 
 # ------------------------------------------------------------------------------- dynamics
 def simulate_case(case, *, throw=True, progress=None, **kw):
-    """The dynamic simulation of the case's ``[dynamics]`` (``bearingsim.dynamics.simulate_case``)."""
+    """The dynamic simulation of the case's ``[dynamics]`` (``bearingsim.dynamics.simulate_case``).
+    Raises CaseError (an InputError) for a sample rate below twice the highest characteristic
+    frequency of the case (:func:`bearingsim.case.check_sampling`)."""
     from . import dynamics
 
+    check_sampling(case)
     res = dynamics.simulate_case(case, progress=progress, throw=False, **kw)
     if throw and int(res.result) != 0:
         message, hint = _code_text(dynamics, res.result, "loosen [dynamics] rtol/atol or check the "
@@ -264,8 +268,9 @@ class Comparison(NamedTuple):
     rows: list
 
 
-_COMPARED = (("Q_outer", "N", 1.0, 1e-6), ("Q_inner", "N", 1.0, 1e-6),
-             ("alpha_outer", "deg", 180.0 / np.pi, 1e-3), ("alpha_inner", "deg", 180.0 / np.pi, 1e-3))
+#: (quantity, unit, |quasi-static| below which no ratio is given, in that unit)
+_COMPARED = (("Q_outer", "N", 1e-6), ("Q_inner", "N", 1e-6), ("alpha_outer", "deg", 1e-3),
+             ("alpha_inner", "deg", 1e-3))
 
 
 def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
@@ -286,14 +291,14 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
         return d / s if abs(s) > tol else np.nan
 
     rows = []
-    for name, unit, f, tol in _COMPARED:
-        d = np.asarray(getattr(res, name))[idx] * f
-        s = np.asarray(getattr(qs, name)) * f
+    for name, unit, tol in _COMPARED:
+        d = from_si(np.asarray(getattr(res, name))[idx], unit)
+        s = from_si(np.asarray(getattr(qs, name)), unit)
         rows.append((f"max {name}", unit, s.max(), d.max(), ratio(d.max(), s.max(), tol)))
         if name.startswith("alpha"):
             rows.append((f"min {name}", unit, s.min(), d.min(), ratio(d.min(), s.min(), tol)))
-    qd = np.asarray(res.ring_displacement)[idx] * 1e6
-    qq = np.asarray(qs.displacement)[:, :3] * 1e6
+    qd = from_si(np.asarray(res.ring_displacement)[idx], "um")
+    qq = from_si(np.asarray(qs.displacement)[:, :3], "um")
     for j, lab in enumerate(("x", "y", "axial")):
         amp_s, amp_d = np.ptp(qq[:, j]), np.ptp(qd[:, j])
         rows.append((f"peak-to-peak ring {lab}", "um", amp_s, amp_d, ratio(amp_d, amp_s, 1e-6)))

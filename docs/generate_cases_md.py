@@ -281,7 +281,8 @@ def render() -> str:
         "A case file describes one bearing, its operating condition and loads, an optional "
         "spall on the outer raceway, and the optional sweep, study and dynamics settings. "
         "The commands read one (`bearingsim static CASE.toml`, ...; see `bearingsim --help`); from Python, "
-        "`bearingsim.case.load_case(path)` returns a validated `Case`. " + _schema_intro(),
+        "`bearingsim.case.load_case(path)` returns a validated `Case` (`load_case(\"demo\")` loads a case shipped "
+        "with the package by name: `bearingsim.case.shipped_cases()` lists them). " + _schema_intro(),
         "",
         "## Units are part of the key names",
         "",
@@ -320,10 +321,13 @@ def render() -> str:
         "",
         "Unknown sections and keys, wrong types, values out of range, a missing required key, both "
         "or neither of an exactly-one pair, and failed cross-checks are all errors. The reader "
-        "collects *every* problem of the file and raises one `CaseError` (a `ValueError`) with one "
+        "collects *every* problem of the file and raises one `CaseError` (a `bearingsim.errors.InputError`, "
+        "hence a `ValueError`) with one "
         "line per problem, each prefixed by the file name; a misspelt key, section or choice gets "
         "a \"did you mean\" suggestion (or the list of valid names). The command line prints the "
-        "message and exits with status 2. For example, this file",
+        "message and exits with status 2. A file that is not UTF-8 text, a duplicate key (named, with "
+        "both lines) and a TOML syntax error (with the line and its key) are reported the same way. "
+        "For example, this file",
         "",
         "```toml",
         BAD_EXAMPLE.rstrip(),

@@ -1,0 +1,244 @@
+"""Case files: TOML in engineering units -> validated, normalised data -> SI core objects.
+
+A case file describes one bearing, its operating condition, loads, an optional outer-raceway
+spall, and the optional sweep / study / dynamics / dataset settings, e.g.::
+
+    title = "Harris 218 angular contact ball bearing"
+    [bearing]
+    balls = 16
+    ball_diameter_mm = 22.225
+    pitch_diameter_mm = 125.26
+    inner_groove_curvature = 0.5232
+    outer_groove_curvature = 0.5232
+    free_contact_angle_deg = 40.0
+    [operation]
+    speed_rpm = 10000
+    [load]
+    axial_N = 22250
+
+``load_case("demo")`` reads a shipped case by name, ``load_case("my.toml")`` a file.  The package
+is split by job:
+
+=================== ==================================================================
+module              holds
+=================== ==================================================================
+``units``           the one table of units (:data:`UNITS`, ``to_si``, ``from_si``)
+``schema``          :data:`SCHEMA`: sections -> keys -> :class:`Key` (type, default, range, unit, doc)
+``validation``      checks driven by the schema, cross-checks, :class:`CaseError`
+``files``           shipped cases by name, reading UTF-8 text, TOML errors told by key
+``sampling``        the sample-rate rule of simulated signals (:func:`check_sampling`)
+``toml_writer``     :func:`to_toml`
+``reference``       :func:`schema_reference_markdown` (the reference page)
+``messages``        how values and names are shown in messages ("did you mean")
+=================== ==================================================================
+
+All problems of a case are collected and raised together as one :class:`CaseError` (an
+:class:`~bearingsim.errors.InputError`, exit code 2) with one line per problem, each prefixed
+by the source file name.  This package is the edge: it reads files; the core never does.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .files import case_path, parse_toml, read_case_text, shipped_cases, shipped_cases_dir
+from .messages import fmt_value, suggest
+from .reference import schema_reference_markdown
+from .sampling import characteristic_frequencies, check_sampling
+from .schema import OPTIONAL, REQUIRED, SCHEMA, Key, Section, all_keys, lookup, si_name, split_key, unit_of
+from .toml_writer import to_toml
+from .units import UNITS, to_si
+from .validation import CaseError, section_raw, set_raw, validate
+
+__all__ = [
+    "CaseError",
+    "Case",
+    "Key",
+    "Section",
+    "SCHEMA",
+    "UNITS",
+    "REQUIRED",
+    "OPTIONAL",
+    "load_case",
+    "parse_case",
+    "case_from_dict",
+    "case_path",
+    "shipped_cases",
+    "shipped_cases_dir",
+    "unit_of",
+    "check_sampling",
+    "characteristic_frequencies",
+    "to_toml",
+    "schema_reference_markdown",
+]
+
+
+@dataclass(frozen=True)
+class Case:
+    """A validated case.  Build it with :func:`load_case` / :func:`parse_case`.
+
+    ``text``: the TOML text; ``source``: where it came from (file name); ``data``: normalised
+    nested dict in the file's engineering units, defaults filled in (floats for float keys).
+    Do not mutate ``data``; use :meth:`with_value`.
+    """
+
+    source: str
+    text: str
+    data: dict
+    raw: dict = field(repr=False, compare=False)  # the parsed TOML, without defaults
+
+    # -- access ---------------------------------------------------------------------------------
+    @property
+    def title(self) -> str:
+        return self.data.get("title", "")
+
+    def get(self, dotted_key: str):
+        """Value of a dotted key ("bearing.balls", "material.ball.density_kg_m3"), or a copy of a
+        section ("bearing").  None for a schema key that this case does not set (e.g. the unused
+        one of an exactly-one pair, or a key of an absent optional section)."""
+        path, key = split_key(dotted_key)
+        if dotted_key in SCHEMA:
+            sec = section_raw(self.data, dotted_key)
+            return None if sec is None else copy.deepcopy(sec)
+        if path not in SCHEMA or key not in SCHEMA[path].keys:
+            valid = all_keys() + [p for p in SCHEMA if p]
+            raise KeyError(f"'{dotted_key}' is not a case key: {suggest(dotted_key, valid)}")
+        sec = section_raw(self.data, path)
+        return None if sec is None else copy.deepcopy(sec.get(key))
+
+    def with_value(self, dotted_key: str, value) -> "Case":
+        """A new validated case with one key changed (engineering units, as in the file).
+
+        Setting one key of an exactly-one pair (e.g. ``bearing.diametral_clearance_mm``) removes
+        the other.  Computed defaults (``sweep.stop_deg``) follow the change unless given
+        explicitly.  The new ``text`` is the TOML of the changed file (comments are not kept).
+        Raises CaseError if the result is invalid.
+        """
+        if lookup(dotted_key) is None:
+            valid = all_keys()
+            raise KeyError(f"'{dotted_key}' is not a case key: {suggest(dotted_key, valid)}")
+        if hasattr(value, "item") and not isinstance(value, (bool, int, float, str)):
+            value = value.item()  # numpy / jax scalars
+        raw = set_raw(self.raw, dotted_key, value)
+        text = to_toml(raw, header=f"{self.source} with {dotted_key} = {fmt_value(value)}")
+        return _case_from_raw(raw, text, self.source)
+
+    def study_cases(self) -> list["Case"]:
+        """One case per study value (each without the [study] section); [] without a study."""
+        st = self.study_settings()
+        if st is None:
+            return []
+        param, values = st
+        base = copy.deepcopy(self.raw)
+        base.pop("study", None)
+        base_case = _case_from_raw(base, to_toml(base), self.source)
+        return [base_case.with_value(param, v) for v in values]
+
+    # -- SI objects -----------------------------------------------------------------------------
+    def _si(self, path: str) -> dict:
+        """Section ``path`` in SI, keys without their unit suffix."""
+        sec = section_raw(self.data, path) or {}
+        out = {}
+        for key, spec in SCHEMA[path].keys.items():
+            if key in sec:
+                v = sec[key]
+                out[si_name(key, spec)] = (to_si(v, spec.unit) if spec.type == "float" else
+                                            [to_si(x, spec.unit) for x in v] if spec.type == "range" else v)
+        return out
+
+    def _material(self, path: str):
+        from ..geometry import Material
+        m = self._si(path)
+        return Material(m["youngs_modulus"], m["poisson_ratio"], m["density"])
+
+    def bearing(self):
+        """:class:`bearingsim.Bearing` in SI."""
+        from ..geometry import Bearing
+        b = self._si("bearing")
+        rings = self._material("material")
+        balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
+        args = (b["balls"], b["ball_diameter"], b["pitch_diameter"], b["inner_groove_curvature"],
+                b["outer_groove_curvature"])
+        if "diametral_clearance" in b:
+            return Bearing.from_clearance(*args, b["diametral_clearance"], ball_material=balls,
+                                          ring_material=rings)
+        return Bearing(*args, b["free_contact_angle"], balls, rings)
+
+    def operation(self):
+        """:class:`bearingsim.Operation` (speed in rad/s via ``Operation.from_rpm``)."""
+        from ..kinematics import Operation
+        o = self.data["operation"]
+        return Operation.from_rpm(o["speed_rpm"], o["raceway_control"], o["centrifugal"], o["gyroscopic"])
+
+    @property
+    def hertz_method(self) -> str:
+        """"exact" or "brewe-hamrock" (the solvers' ``hertz_method``)."""
+        return self.data["operation"]["hertz"]
+
+    @property
+    def cage_angle(self) -> float:
+        """Cage angle theta_c (rad)."""
+        return self._si("operation")["cage_angle"]
+
+    def loads(self):
+        """Inner-ring loads [Fx, Fy, Fz, Mx, My] (N, N m) as a float64 jax array."""
+        from ..jones import load_vector
+        ld = self._si("load")
+        return load_vector(axial=ld["axial"], radial_x=ld["radial_x"], radial_y=ld["radial_y"],
+                           moment_x=ld["moment_x"], moment_y=ld["moment_y"])
+
+    def spall(self):
+        """:class:`bearingsim.Spall` (rad, m), or None for a healthy bearing (no [defect])."""
+        from ..defect import Spall
+        if "defect" not in self.data:
+            return None
+        d = self._si("defect")
+        if "length" in d:
+            return Spall.from_length(self.bearing(), d["center"], d["length"], d["depth"], d["profile"])
+        return Spall(d["center"], d["extent"], d["depth"], d["profile"])
+
+    def sweep_settings(self) -> dict:
+        """dict(start=rad, stop=rad, steps=int); defaults: 0, one ball pitch 2 pi / Z, 181."""
+        return self._si("sweep")
+
+    def study_settings(self):
+        """(parameter, values) with values in the key's unit as in the file, or None."""
+        st = self.data.get("study")
+        if st is None:
+            return None
+        return st["parameter"], list(st["values"])
+
+    def dataset_settings(self) -> dict | None:
+        """The [dataset] keys in SI without unit suffix (ranges as [min, max]), or None."""
+        if "dataset" not in self.data:
+            return None
+        return self._si("dataset")
+
+    def dynamics_settings(self) -> dict:
+        """The [dynamics] keys in SI without unit suffix: dict(duration=s, sample_rate=Hz, ...)."""
+        return self._si("dynamics")
+
+
+def _case_from_raw(raw: dict, text: str, source: str) -> Case:
+    data = validate(raw, source)
+    return Case(source=source, text=text, data=data, raw=raw)
+
+
+def parse_case(text: str, source: str = "<string>") -> Case:
+    """Parse and validate TOML case text.  Raises CaseError listing every problem."""
+    return _case_from_raw(parse_toml(text, source), text, source)
+
+
+def load_case(name_or_path) -> Case:
+    """Read and validate a case file, or a shipped case by name (see :func:`case_path`).  Error
+    lines are prefixed with the path as given (the full path for a shipped case)."""
+    p = case_path(name_or_path)
+    source = str(name_or_path) if p == Path(name_or_path) else str(p)
+    return parse_case(read_case_text(p, source), source=source)
+
+
+def case_from_dict(data: dict, source: str = "<dict>") -> Case:
+    """Validate a nested dict shaped like a case file (engineering units)."""
+    raw = copy.deepcopy(data)
+    return _case_from_raw(raw, to_toml(raw), source)

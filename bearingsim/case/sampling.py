@@ -1,0 +1,36 @@
+"""The sampling rule of simulated signals: a sample rate below twice the highest characteristic
+frequency of the case (shaft, FTF, BPFO, BPFI, BSF, 2 BSF) cannot show the defect, so it is
+refused, naming the keys and the minimum rate."""
+from __future__ import annotations
+
+from .messages import fmt_num
+from .units import from_si, to_si
+from .validation import CaseError
+
+__all__ = ["characteristic_frequencies", "check_sampling"]
+
+_NAMES = {"ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf": "BSF", "two_bsf": "2 BSF"}
+
+
+def characteristic_frequencies(case, speed_rpm=None) -> dict:
+    """Shaft and defect frequencies (Hz) of the case at ``speed_rpm`` (default: the case's
+    ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
+    from ..kinematics import defect_frequencies
+
+    n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
+    shaft = from_si(to_si(n, "rpm"), "rev_s")
+    f = defect_frequencies(case.bearing(), shaft)._asdict()
+    return {"shaft": shaft, **{label: float(f[k]) for k, label in _NAMES.items()}}
+
+
+def check_sampling(case, speed_rpm=None, speed_key="operation.speed_rpm"):
+    """Raise CaseError when ``dynamics.sample_rate_Hz`` is below twice the highest characteristic
+    frequency at ``speed_rpm`` (default the case's speed; ``speed_key`` names where it comes from)."""
+    n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
+    name, f = max(characteristic_frequencies(case, n).items(), key=lambda kv: kv[1])
+    fs = case.get("dynamics.sample_rate_Hz")
+    if fs < 2.0 * f:
+        raise CaseError(case.source, [
+            f"dynamics.sample_rate_Hz = {fmt_num(fs)} is below twice the highest characteristic frequency "
+            f"of the case ({name} {f:.1f} Hz at {speed_key} {fmt_num(n)} rpm, free contact angle): "
+            f"need sample_rate_Hz >= {2.0 * f:.1f} Hz"])

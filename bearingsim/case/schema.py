@@ -1,0 +1,398 @@
+"""The case-file schema: one table (:data:`SCHEMA`) of sections -> keys -> :class:`Key` specs
+(type, default, allowed range, unit, doc), from which validation, defaults, error messages, the
+SI conversion and the reference page all follow.  A new key is one new row.
+
+Units are part of the key names; the suffix is a unit of :mod:`bearingsim.case.units`.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from .messages import fmt_num, suggest
+from .units import label
+
+__all__ = ["REQUIRED", "OPTIONAL", "TYPE_NAMES", "Key", "Section", "SCHEMA", "parent", "subsections",
+           "join_key", "split_key", "si_name", "lookup", "unit_of", "all_keys"]
+
+
+class _Marker:
+    def __init__(self, name):
+        self.name = name
+
+    def __repr__(self):
+        return self.name
+
+
+#: default marker: the key must be given
+REQUIRED = _Marker("REQUIRED")
+#: default marker: the key may be absent and then has no value (e.g. one of an exactly-one pair)
+OPTIONAL = _Marker("OPTIONAL")
+
+TYPE_NAMES = {
+    "float": "a number",
+    "int": "an integer",
+    "bool": "a boolean (true or false)",
+    "str": "a string",
+    "enum": "a string",
+    "numbers": "a non-empty array of numbers",
+    "range": "a two-element array [min, max] of numbers",
+}
+
+
+@dataclass(frozen=True)
+class Key:
+    """Spec of one case key.
+
+    ``type``: "float" (int accepted), "int", "bool", "str", "enum" (a string from ``choices``)
+    "numbers" (non-empty array, elements checked elsewhere) or "range" (``[min, max]``: two finite
+    numbers, min <= max, each within gt/ge/lt/le; min = max fixes the value).
+    ``default``: a value, :data:`REQUIRED`, :data:`OPTIONAL`, or a callable ``f(section_data,
+    data)`` evaluated on the normalised data once the other keys are known (``default_doc``
+    then describes it).  ``gt/ge/lt/le``: allowed range (exclusive / inclusive bounds).
+    ``unit``: a key of :data:`UNITS` (also the key name's suffix).  ``doc``: one line.
+    """
+
+    type: str
+    doc: str
+    unit: str = ""
+    default: Any = REQUIRED
+    gt: float | None = None
+    ge: float | None = None
+    lt: float | None = None
+    le: float | None = None
+    choices: tuple[str, ...] = ()
+    default_doc: str | None = None
+
+    @property
+    def numeric(self) -> bool:
+        return self.type in ("float", "int")
+
+    @property
+    def unit_label(self) -> str:
+        return label(self.unit)
+
+    def range_text(self) -> str:
+        """'>= 3', '> 0.5 and < 1', ... with the unit; '' when unbounded."""
+        parts = []
+        if self.gt is not None:
+            parts.append(f"> {fmt_num(self.gt)}")
+        if self.ge is not None:
+            parts.append(f">= {fmt_num(self.ge)}")
+        if self.lt is not None:
+            parts.append(f"< {fmt_num(self.lt)}")
+        if self.le is not None:
+            parts.append(f"<= {fmt_num(self.le)}")
+        text = " and ".join(parts)
+        if text and self.unit_label:
+            text += f" {self.unit_label}"
+        return text
+
+    def requirement_text(self) -> str:
+        """What an acceptable value looks like, e.g. 'an integer >= 3' or '>= 0 rpm'."""
+        rng = self.range_text()
+        if self.type == "int":
+            return f"an integer {rng}" if rng else "an integer"
+        if self.type == "float":
+            return rng if rng else "a finite number"
+        if self.type == "enum":
+            return "one of " + ", ".join(json.dumps(c) for c in self.choices)
+        if self.type == "range":
+            return "[min, max] with min <= max" + (f", each {rng}" if rng else "")
+        return TYPE_NAMES[self.type]
+
+
+@dataclass(frozen=True)
+class Section:
+    """Spec of one case section ([name]; the root section is "").
+
+    ``required``: the section must be present.  ``fill_defaults``: when the section is absent,
+    ``Case.data`` still holds it with its defaults (otherwise an absent section stays absent).
+    ``exactly_one``: groups of keys of which exactly one must be given.  ``notes``: the
+    cross-checks of the section, for the documentation.
+    """
+
+    doc: str
+    keys: dict[str, Key]
+    required: bool = False
+    fill_defaults: bool = True
+    exactly_one: tuple[tuple[str, ...], ...] = ()
+    notes: tuple[str, ...] = ()
+
+
+def _num(doc, unit="", default=REQUIRED, **rng):
+    return Key("float", doc, unit, default, **rng)
+
+
+def _int(doc, default=REQUIRED, **rng):
+    return Key("int", doc, "", default, **rng)
+
+
+def _bool(doc, default=REQUIRED):
+    return Key("bool", doc, "", default)
+
+
+def _str(doc, default=REQUIRED):
+    return Key("str", doc, "", default)
+
+
+def _enum(doc, choices, default=REQUIRED):
+    return Key("enum", doc, "", default, choices=tuple(choices))
+
+
+def _range(doc, unit="", default=REQUIRED, default_doc=None, **rng):
+    return Key("range", doc, unit, default, default_doc=default_doc, **rng)
+
+
+def _fixed_from(section, key):
+    """Default of a [dataset] range: the case's own value, fixed ([v, v]); None if absent."""
+    def default(sec, data):
+        v = data.get(section, {}).get(key)
+        return None if v is None else [float(v), float(v)]
+    return default
+
+
+def _default_sweep_stop(sec, data):
+    z = data.get("bearing", {}).get("balls")
+    start = sec.get("start_deg")
+    if z is None or start is None:
+        return None
+    return start + 360.0 / z
+
+
+_MATERIAL_KEYS = {
+    "youngs_modulus_GPa": _num("Young's modulus E", "GPa", 207.5, gt=0),
+    "poisson_ratio": _num("Poisson's ratio nu", "", 0.3, ge=0, lt=0.5),
+    "density_kg_m3": _num("density rho; gives the ball mass for F_c and M_g",
+                          "kg_m3", 7850.0, gt=0),
+}
+
+#: section path -> Section.  Order is the order of the docs and of emitted TOML.
+SCHEMA: dict[str, Section] = {
+    "": Section(
+        "Top-level keys.",
+        {
+            "title": _str("one-line title of the case (plots and reports)", ""),
+            "description": _str("free-form notes: sources, assumptions", ""),
+        },
+        required=True,
+    ),
+    "bearing": Section(
+        "Geometry of the bearing (MODEL.md section 2).",
+        {
+            "balls": _int("number of balls Z", ge=3),
+            "ball_diameter_mm": _num("ball diameter D", "mm", gt=0),
+            "pitch_diameter_mm": _num("pitch diameter d_m", "mm", gt=0),
+            "inner_groove_curvature": _num("inner groove curvature ratio f_i = r_i / D", "", gt=0.5, lt=1.0),
+            "outer_groove_curvature": _num("outer groove curvature ratio f_o = r_o / D", "", gt=0.5, lt=1.0),
+            "free_contact_angle_deg": _num("free (unloaded) contact angle alpha_0", "deg", OPTIONAL,
+                                           ge=0, le=80),
+            "diametral_clearance_mm": _num("diametral clearance P_d; then cos alpha_0 = 1 - P_d / (2 B D), "
+                                           "B = f_i + f_o - 1", "mm", OPTIONAL, ge=0),
+        },
+        required=True,
+        exactly_one=(("free_contact_angle_deg", "diametral_clearance_mm"),),
+        notes=(
+            "pitch_diameter_mm > ball_diameter_mm",
+            "the balls fit around the pitch circle: ball_diameter_mm < pitch_diameter_mm * sin(180 deg / balls)",
+            "diametral_clearance_mm gives a free contact angle within [0, 80] deg: "
+            "P_d <= 2 B D (1 - cos 80 deg)",
+        ),
+    ),
+    "material": Section(
+        "Material of the rings, and of the balls unless [material.ball] is given. "
+        "Default: bearing steel.",
+        dict(_MATERIAL_KEYS),
+    ),
+    "material.ball": Section(
+        "Optional ball material for hybrid bearings (e.g. silicon nitride: 310 GPa, 0.26, 3200 kg/m^3); "
+        "[material] is then the rings only.  All three keys are required when the section is given.",
+        {k: Key(v.type, v.doc, v.unit, REQUIRED, v.gt, v.ge, v.lt, v.le) for k, v in _MATERIAL_KEYS.items()},
+        fill_defaults=False,
+    ),
+    "operation": Section(
+        "Operating condition: inner ring turning, outer ring fixed (MODEL.md sections 1 and 4).",
+        {
+            "speed_rpm": _num("inner-ring speed n", "rpm", ge=0),
+            "raceway_control": _enum("raceway control hypothesis for the ball kinematics",
+                                     ("outer", "inner", "equal"), "outer"),
+            "centrifugal": _bool("include the ball centrifugal force F_c", True),
+            "gyroscopic": _bool("include the ball gyroscopic moment M_g", True),
+            "cage_angle_deg": _num("cage angle theta_c: azimuth of ball 0, from +x towards +y", "deg", 0.0),
+            "hertz": _enum("Hertz ellipticity and elliptic integrals: exact, or the Brewe-Hamrock "
+                           "approximation", ("exact", "brewe-hamrock"), "exact"),
+        },
+        required=True,
+    ),
+    "load": Section(
+        "Loads applied to the inner ring in the MODEL.md section 1 frame (z axial, +Fz loads the "
+        "bearing in its contact direction; +Fx makes the ball at azimuth 0 the most loaded).",
+        {
+            "axial_N": _num("axial force Fz", "N", 0.0),
+            "radial_x_N": _num("radial force Fx", "N", 0.0),
+            "radial_y_N": _num("radial force Fy", "N", 0.0),
+            "moment_x_Nm": _num("moment Mx about +x", "Nm", 0.0),
+            "moment_y_Nm": _num("moment My about +y", "Nm", 0.0),
+        },
+    ),
+    "defect": Section(
+        "Optional spall on the outer raceway (MODEL.md section 5).  Absent: healthy bearing.",
+        {
+            "center_deg": _num("azimuth psi_d of the spall centre", "deg", 0.0),
+            "extent_deg": _num("circumferential extent of the spall", "deg", OPTIONAL, gt=0),
+            "length_mm": _num("arc length b of the spall along the outer raceway, "
+                              "radius R_o = (d_m + D cos alpha_0) / 2", "mm", OPTIONAL, gt=0),
+            "depth_mm": _num("depth d of the spall (0: healthy)", "mm", ge=0),
+            "profile": _enum("depth profile under a ball: rectangular (step) or ball-path (the ball "
+                             "centre follows the edges; continuous)", ("rectangular", "ball-path"),
+                             "ball-path"),
+        },
+        fill_defaults=False,
+        exactly_one=(("extent_deg", "length_mm"),),
+        notes=(
+            "the spall is shorter than the ball pitch 360 deg / balls: only one ball at a time "
+            "may be over the spall",
+            "depth_mm < bearing.ball_diameter_mm",
+        ),
+    ),
+    "sweep": Section(
+        "Cage-angle sweep (MODEL.md section 6).",
+        {
+            "start_deg": _num("first cage angle", "deg", 0.0),
+            "stop_deg": Key("float", "last cage angle", "deg", _default_sweep_stop,
+                            default_doc="start_deg + 360 / balls (one ball pitch)"),
+            "steps": _int("number of cage angles, start and stop included", 181, ge=2),
+        },
+        notes=("stop_deg != start_deg",),
+    ),
+    "study": Section(
+        "Optional parameter study: the case is run once per value of one key.",
+        {
+            "parameter": _str("dotted name of a numeric key of this schema, e.g. \"operation.speed_rpm\""),
+            "values": Key("numbers", "values of the parameter, in the key's unit; each must pass "
+                          "that key's validation (and the whole case must stay valid)"),
+        },
+        fill_defaults=False,
+        notes=("parameter names a numeric key outside [study], of a section the case has "
+               "(or one that has defaults)",),
+    ),
+    "dynamics": Section(
+        "Settings of the dynamic simulation (MODEL.md section 7).",
+        {
+            "duration_s": _num("simulated time", "s", 1.0, gt=0),
+            "sample_rate_Hz": _num("output sample rate of the signals", "Hz", 48000.0, gt=0),
+            "shaft_mass_kg": _num("mass m_s of the inner ring and the shaft/rotor it carries "
+                                  "(translations x, y, axial)", "kg", 2.0, gt=0),
+            "housing_mass_kg": _num("mass m_h of the outer ring and housing (x, y)", "kg", 5.0, gt=0),
+            "housing_stiffness_N_per_m": _num("support stiffness k_h of the housing (x and y)",
+                                              "N_per_m", 5e7, gt=0),
+            "housing_damping_Ns_per_m": _num("support damping c_h of the housing (x and y)",
+                                             "Ns_per_m", 2000.0, ge=0),
+            "resonance_frequency_Hz": _num("natural frequency f_n of the structural resonator on the "
+                                           "housing (x); the sensor measures its acceleration",
+                                           "Hz", 3000.0, gt=0),
+            "resonance_damping_ratio": _num("damping ratio zeta of the resonator", "", 0.05, gt=0, lt=1),
+            "resonator_mass_kg": _num("mass m_r of the resonator (its reaction acts on the housing)",
+                                      "kg", 0.05, gt=0),
+            "contact_damping_ratio": _num("bearing contact damping: c_b = 2 zeta_b sqrt(k m_s) per "
+                                          "direction with k the quasi-static stiffness diagonal (x, y, axial)",
+                                          "", 0.05, ge=0, lt=2),
+            "unbalance_kg_m": _num("rotating unbalance m_u e of the shaft (force m_u e omega^2 at shaft "
+                                   "speed, along +x at t = 0)", "kg_m", 0.0, ge=0),
+            "noise_rms_m_s2": _num("white Gaussian noise added to the sensor acceleration (rms)",
+                                   "m_s2", 0.0, ge=0),
+            "seed": _int("seed of the noise generator", 0, ge=0),
+            "rtol": _num("relative tolerance of the adaptive time integration", "", 1e-5, gt=0, lt=1),
+            "atol": _num("absolute tolerance of the time integration, on displacements in um and "
+                         "velocities in mm/s", "", 1e-5, gt=0),
+        },
+        notes=("duration_s x sample_rate_Hz gives at least 2 samples",
+               "a simulation (``bearingsim simulate``, ``compare``, ``dataset``) refuses a "
+               "sample_rate_Hz below twice the highest characteristic frequency of the case "
+               "(shaft, FTF, BPFO, BPFI, BSF, 2 BSF at the free contact angle and the highest speed)"),
+    ),
+    "dataset": Section(
+        "Labelled data set of simulated sensor signals (``bearingsim dataset``): ``count`` items, "
+        "each a [dynamics] simulation of ``duration_s`` with its speed, loads and spall drawn "
+        "uniformly from the [min, max] ranges below (min = max fixes a value); the first "
+        "round(healthy_fraction x count) items are healthy (no spall).  The other [dynamics] "
+        "keys (sample rate, structure, tolerances, noise) apply to every item.",
+        {
+            "count": _int("number of items N", ge=1),
+            "seed": _int("seed of the label draw (numpy default_rng) and of the noise", 0, ge=0),
+            "duration_s": _num("simulated time per item", "s", 0.1, gt=0),
+            "chunk": _int("items simulated together (vmap); memory and speed trade-off", 16, ge=1),
+            "healthy_fraction": _num("fraction of healthy items (spall depth and length 0)", "",
+                                     0.2, ge=0, le=1),
+            "speed_rpm": _range("inner-ring speed range", "rpm", _fixed_from("operation", "speed_rpm"),
+                                "[operation.speed_rpm, operation.speed_rpm]", gt=0),
+            "radial_N": _range("radial load range, along +x (the load zone is centred at azimuth 0)",
+                               "N", _fixed_from("load", "radial_x_N"),
+                               "[load.radial_x_N, load.radial_x_N]", ge=0),
+            "axial_N": _range("axial load range", "N", _fixed_from("load", "axial_N"),
+                              "[load.axial_N, load.axial_N]", ge=0),
+            "spall_length_mm": _range("spall arc length range along the outer raceway", "mm",
+                                      _fixed_from("defect", "length_mm"),
+                                      "[defect.length_mm, defect.length_mm]", gt=0),
+            "spall_depth_mm": _range("spall depth range", "mm", _fixed_from("defect", "depth_mm"),
+                                     "[defect.depth_mm, defect.depth_mm]", ge=0),
+            "spall_center_deg": _range("spall centre azimuth range (0: centre of the load zone)",
+                                       "deg", _fixed_from("defect", "center_deg"),
+                                       "[defect.center_deg, defect.center_deg]", ge=-360, le=360),
+        },
+        fill_defaults=False,
+        notes=(
+            "spall_length_mm and spall_depth_mm must be given when the case has no [defect] "
+            "(with length_mm) to take them from",
+            "spall_depth_mm max < bearing.ball_diameter_mm; spall_length_mm max shorter than the "
+            "ball pitch along the outer raceway",
+            "radial_N and axial_N may not both allow 0 (an unloaded bearing has no solution)",
+            "duration_s x dynamics.sample_rate_Hz gives at least 2 samples",
+        ),
+    ),
+}
+
+
+def parent(path: str) -> str | None:
+    if path == "":
+        return None
+    return path.rpartition(".")[0]
+
+
+def subsections(path: str) -> list[str]:
+    """Names (last component) of the sections directly under ``path``."""
+    return [p.rpartition(".")[2] for p in SCHEMA if p != "" and parent(p) == path]
+
+
+def join_key(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+def split_key(dotted: str) -> tuple[str, str]:
+    path, _, key = dotted.rpartition(".")
+    return path, key
+
+
+def si_name(key: str, spec: Key) -> str:
+    if spec.unit and key.endswith("_" + spec.unit):
+        return key[: -len(spec.unit) - 1]
+    return key
+
+
+def lookup(dotted: str) -> Key | None:
+    path, key = split_key(dotted)
+    sec = SCHEMA.get(path)
+    return None if sec is None else sec.keys.get(key)
+
+
+def unit_of(dotted_key: str) -> str:
+    """Unit of a case key as shown in files and messages ("mm", "rpm", "N m"; "" if none)."""
+    spec = lookup(dotted_key)
+    if spec is None:
+        raise KeyError(f"'{dotted_key}' is not a case key: {suggest(dotted_key, all_keys())}")
+    return spec.unit_label
+
+
+def all_keys() -> list[str]:
+    return [join_key(p, k) for p, s in SCHEMA.items() for k in s.keys]
