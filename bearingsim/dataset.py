@@ -188,11 +188,12 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     import h5py
     from tqdm import tqdm
 
+    ds = _settings(case)
+    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
+
     from . import io
     from .dynamics import DynamicsParameters, _time_grid, simulate_batch
 
-    ds = _settings(case)
-    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
     d = case.dynamics_settings()
     b = case.bearing()
     Z = b.n_balls
