@@ -105,6 +105,8 @@ def _to_jsonable(obj, name):
 
 
 def write_json(path, data: dict):
+    """Write ``data`` (dicts, lists, numbers, arrays) as JSON atomically; refuses NaN and infinity."""
+    data = _to_jsonable(data, Path(path).name)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(data, indent=2) + "\n")
 

@@ -720,3 +720,39 @@ def test_cwru_case():
     assert c.get("operation.speed_rpm") == 1797.0
     np.testing.assert_array_equal(np.asarray(c.loads()), [1000.0, 0.0, 0.0, 0.0, 0.0])
     assert {k: c.dynamics_settings()[k] for k in ("duration", "sample_rate")} == {"duration": 1.0, "sample_rate": 48000.0}
+
+
+# ---------------------------------------------------------------------------------------------
+# shipped cases by name, units
+# ---------------------------------------------------------------------------------------------
+def test_shipped_cases_load_by_name_as_by_path():
+    from bearingsim.case import shipped_cases
+
+    names = shipped_cases()
+    assert names == sorted(p.relative_to(CASES_DIR).with_suffix("").as_posix() for p in CASE_FILES)
+    for name in ("cwru_6205", "seed/speed", "demo.toml"):
+        by_name = load_case(name)
+        by_path = load_case(CASES_DIR / (name.removesuffix(".toml") + ".toml"))
+        assert by_name.data == by_path.data and Path(by_name.source).is_file()
+
+
+def test_unknown_case_name_suggests_a_shipped_one(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(CaseError, match="did you mean 'cwru_6205'"):
+        load_case("cwru6205")
+    with pytest.raises(CaseError, match="shipped cases: cwru_6205, .*demo"):
+        load_case("zzz")
+    (tmp_path / "demo.toml").write_text(EXAMPLE)          # a file of that name wins over the shipped case
+    assert load_case("demo.toml").title == load_case(str(tmp_path / "demo.toml")).title != load_case("demo").title
+
+
+def test_unit_table_round_trips_and_covers_every_key():
+    from bearingsim.case.units import UNITS, from_si, label, to_si
+
+    for unit in UNITS:
+        assert from_si(to_si(2.5, unit), unit) == pytest.approx(2.5)
+    used = {spec.unit for section in SCHEMA.values() for spec in section.keys.values()}
+    assert used <= set(UNITS)
+    assert to_si(10000, "rpm") == pytest.approx(10000 * 2 * math.pi / 60)
+    assert from_si(math.pi, "deg") == pytest.approx(180.0) and label("Nm") == "N m"
+    assert from_si(1.0, "N_per_mm1_5") == pytest.approx(1e3 ** -1.5)

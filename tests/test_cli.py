@@ -1,83 +1,43 @@
-"""Command line and results files: the fixed JSON/HDF5 interfaces, units, clear errors."""
+"""The command line: commands, what they print and write, exit codes 0 / 2 / 3 / 4.
+
+The layouts of the files are tested in test_io.py, the computations in test_workflows.py and the
+bad inputs in test_bad_inputs.py."""
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import h5py
 import numpy as np
 import pytest
 
-from bearingsim import cli
+from bearingsim import cli, io, workflows
+from bearingsim.case import load_case
+from bearingsim.dataset import DatasetResult, DatasetSummary
 
 ROOT = Path(__file__).resolve().parent.parent
-SMALL_SWEEP = """
-title = "small sweep"
-[bearing]
-balls = 16
-ball_diameter_mm = 22.225
-pitch_diameter_mm = 125.26
-inner_groove_curvature = 0.5232
-outer_groove_curvature = 0.5232
-free_contact_angle_deg = 40.0
-[operation]
-speed_rpm = 10000
-[load]
-axial_N = 10000
-radial_x_N = 3000
-[defect]
-center_deg = 0.0
-extent_deg = 6.0
-depth_mm = 0.3
-profile = "ball-path"
-[sweep]
-start_deg = -11.25
-stop_deg = 11.25
-steps = 61
-[study]
-parameter = "defect.depth_mm"
-values = [0.0, 0.01, 0.3]
-"""
+SMALL = ROOT / "tests" / "data" / "small_sweep.toml"
 
 
-def test_info(capsys):
-    assert cli.main(["info", str(ROOT / "cases" / "harris218_thrust.toml")]) == 0
+def test_info_by_name(capsys):
+    assert cli.main(["info", "harris218_thrust"]) == 0
     out = capsys.readouterr().out
     assert "1.2965e+06" in out and "1.3486e+06" in out    # K_i, K_o in N/mm^1.5 (reference-data.md: 1.297e6, 1.349e6)
-    assert "BPFO" in out and "once per ball revolution" in out
+    assert "BPFO" in out and "once per ball revolution" in out and "22.2250 mm" in out
 
 
-def test_static_json_interface(tmp_path, capsys):
-    js, png = tmp_path / "s.json", tmp_path / "s.png"
+def test_static_prints_and_writes(tmp_path, capsys):
+    js, png = tmp_path / "s.json", tmp_path / "plots" / "s.png"
     assert cli.main(["static", str(ROOT / "cases" / "harris218_thrust.toml"), "--json", str(js), "--plot", str(png)]) == 0
-    d = json.loads(js.read_text())
-    assert d["converged"] is True and d["iterations"] > 0 and d["residual_norm"] < 1e-6
-    assert d["ring_displacement"]["axial_um"] == pytest.approx(41.47, abs=0.01)
-    for k in ("x_um", "y_um", "tilt_x_mrad", "tilt_y_mrad"):
-        assert abs(d["ring_displacement"][k]) < 1e-9
-    assert d["cage_speed_rpm"] == 0.0
-    balls = d["balls"]
-    for k in ("azimuth_deg", "alpha_inner_deg", "alpha_outer_deg", "Q_inner_N", "Q_outer_N", "delta_inner_um",
-              "delta_outer_um", "centrifugal_N", "gyroscopic_moment_Nm", "p_max_inner_MPa", "p_max_outer_MPa"):
-        assert len(balls[k]) == 16
-    assert balls["alpha_inner_deg"][0] == pytest.approx(41.72, abs=0.005)
-    assert balls["Q_inner_N"][3] == pytest.approx(2089.6, abs=0.05)
-    assert d["stiffness"]["dofs"] == ["x", "y", "axial", "tilt_x", "tilt_y"]
-    assert np.asarray(d["stiffness"]["matrix"]).shape == (5, 5)
+    out = capsys.readouterr().out
+    assert "converged in" in out and "p_o MPa" in out and "axial 41.4" in out and f"wrote {js}" in out
+    assert json.loads(js.read_text())["converged"] is True
     assert png.stat().st_size > 10000
-    assert "ball" in capsys.readouterr().out
-
-
-def test_bad_input_exit_2_names_the_key(tmp_path, capsys):
-    bad = tmp_path / "bad.toml"
-    bad.write_text(SMALL_SWEEP.replace("balls = 16", "balls = 2").replace("speed_rpm", "sped_rpm"))
-    assert cli.main(["static", str(bad)]) == 2
-    err = capsys.readouterr().err
-    assert "bearing.balls = 2" in err and "did you mean 'speed_rpm'" in err
-    assert cli.main(["static", str(tmp_path / "missing.toml")]) == 2
 
 
 def test_non_convergence_exit_3_with_hint(tmp_path, capsys):
     case = tmp_path / "hard.toml"
-    case.write_text(SMALL_SWEEP.replace("axial_N = 10000", "axial_N = 1000").replace("radial_x_N = 3000", "radial_x_N = 20000")
+    case.write_text(SMALL.read_text().replace("axial_N = 10000", "axial_N = 1000")
+                    .replace("radial_x_N = 3000", "radial_x_N = 20000")
                     .replace("speed_rpm = 10000", 'speed_rpm = 20000\nraceway_control = "inner"')
                     .split("[defect]")[0])
     assert cli.main(["static", str(case), "--json", str(tmp_path / "x.json")]) == 3
@@ -86,34 +46,67 @@ def test_non_convergence_exit_3_with_hint(tmp_path, capsys):
     assert not (tmp_path / "x.json").exists()
 
 
-def test_sweep_and_study_h5_layout(tmp_path, capsys):
-    case = tmp_path / "c.toml"
-    case.write_text(SMALL_SWEEP)
-    out = tmp_path / "sweep.h5"
-    assert cli.main(["sweep", str(case), "-o", str(out), "--plot", str(tmp_path / "plots")]) == 0
-    with h5py.File(out) as f:
-        assert f.attrs["case_toml"] == SMALL_SWEEP and "bearingsim_version" in f.attrs
-        g = f["sweep"]
-        shapes = {"cage_angle": (61,), "azimuth": (61, 16), "alpha_inner": (61, 16), "alpha_outer": (61, 16),
-                  "Q_inner": (61, 16), "Q_outer": (61, 16), "ring_displacement": (61, 5), "converged": (61,),
-                  "stiffness": (61, 5, 5)}
-        for name, shape in shapes.items():
-            assert g[name].shape == shape and "units" in g[name].attrs
-        assert g["Q_inner"].attrs["units"] == "N" and g["alpha_inner"].attrs["units"] == "rad"
-        assert np.all(g["converged"][()])
-        for name in g:
-            a = g[name][()]
-            assert a.dtype.kind not in "fc" or np.all(np.isfinite(a))
-    assert (tmp_path / "plots" / "sweep.png").exists()
-    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]       # atomic write
-    out2 = tmp_path / "study.h5"
-    assert cli.main(["study", str(case), "-o", str(out2), "--plot", str(tmp_path / "plots")]) == 0
-    with h5py.File(out2) as f:
-        g = f["study"]
-        assert g.attrs["parameter"] == "defect.depth_mm"
-        np.testing.assert_allclose(g["values"][()], [0.0, 0.01, 0.3])
-        assert g["values"].attrs["units"] == "mm"
-        assert g["Q_outer"].shape == (3, 61, 16) and g["ring_displacement"].shape == (3, 61, 5)
-        Qo = g["Q_outer"][()]
-        assert Qo[2].min() < Qo[0].min()            # the deep spall unloads the passing ball
-    assert (tmp_path / "plots" / "study_defect_depth_mm.png").exists()
+def test_unwritable_output_exit_4(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    assert cli.main(["static", "harris218_thrust", "--json", str(tmp_path / "file" / "s.json")]) == 4
+    assert "cannot write" in capsys.readouterr().err
+
+
+def test_sweep_and_study(tmp_path, capsys):
+    assert cli.main(["sweep", str(SMALL), "-o", str(tmp_path / "sweep.h5"), "--plot", str(tmp_path / "plots")]) == 0
+    out = capsys.readouterr().out
+    assert "61 cage angles from -11.250 to 11.250 deg" in out
+    with h5py.File(tmp_path / "sweep.h5") as f:
+        assert f["sweep"]["Q_outer"].shape == (61, 16)
+    assert cli.main(["study", str(SMALL), "-o", str(tmp_path / "study.h5"), "--plot", str(tmp_path / "plots")]) == 0
+    out = capsys.readouterr().out
+    assert "study of defect.depth_mm over [0.0, 0.01, 0.3] (one sweep per value)" in out and "max Q_o N" in out
+    with h5py.File(tmp_path / "study.h5") as f:
+        assert f["study"]["Q_outer"].shape == (3, 61, 16)
+    assert {p.name for p in (tmp_path / "plots").iterdir()} == {"sweep.png", "study_defect_depth_mm.png"}
+
+
+def test_demo_without_dynamics(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert cli.main(["demo", "--case", str(SMALL), "--out", str(out)]) == 0
+    assert {p.name for p in out.iterdir()} == {"static.json", "static.png", "sweep.h5", "sweep.png"}
+    text = capsys.readouterr().out
+    assert "[1/4] quasi-static solve" in text and "[3/4]" not in text and str(out.resolve()) in text
+
+
+def test_spectrum_of_a_simulation_file(tmp_path, capsys):
+    """An impulse train at BPFO ringing the case's 3 kHz resonance: the peak is found at BPFO."""
+    case = load_case("cwru_6205")
+    fs, bpfo = 24000.0, 107.4
+    t = np.arange(int(0.5 * fs)) / fs
+    a = np.exp(-600.0 * np.mod(t, 1 / bpfo)) * np.sin(2 * np.pi * 3000.0 * t)
+    res = SimpleNamespace(
+        time=t, cage_angle=t, ring_displacement=np.zeros((t.size, 3)), housing_displacement=np.zeros((t.size, 2)),
+        housing_acceleration=np.zeros((t.size, 2)), sensor_acceleration=a, Q_inner=np.zeros((t.size, 9)),
+        Q_outer=np.zeros((t.size, 9)), alpha_inner=np.zeros((t.size, 9)), alpha_outer=np.zeros((t.size, 9)),
+        jump_times=np.zeros(0), pass_times=np.zeros(0), contact_angle=0.0, result=0, num_steps=1,
+        ball_iterations=1, contact_damping=np.zeros(3),
+        frequencies=dict(shaft_Hz=29.95, ftf_Hz=bpfo / 9, bpfo_Hz=bpfo, bpfi_Hz=162.0, bsf_Hz=70.0))
+    io.write_simulation(tmp_path / "sim.h5", case, res)
+    assert cli.main(["spectrum", str(tmp_path / "sim.h5"), "--plot", str(tmp_path / "env.png")]) == 0
+    out = capsys.readouterr().out
+    assert "band 2625-3375 Hz" in out and "relative difference" in out
+    assert abs(workflows.spectrum_file(tmp_path / "sim.h5").peak - bpfo) < 2.1       # resolution 2 Hz
+    assert (tmp_path / "env.png").stat().st_size > 10_000
+
+
+def test_dataset_reports_failed_items(tmp_path, monkeypatch, capsys):
+    code = int(DatasetResult.nonfinite_signal)
+    summary = DatasetSummary(tmp_path / "d.h5", 6, 480, 2, 1.5, {code: 2})
+    monkeypatch.setattr(workflows, "dataset_case", lambda case, path, **kw: summary)
+    assert cli.main(["dataset", "dataset_cwru", "-o", str(tmp_path / "d.h5")]) == 0
+    err = capsys.readouterr().err
+    assert "2 of 6 items failed (2 the simulated signal is not finite)" in err
+    assert summary.message() == ["2 the simulated signal is not finite"] and not summary.converged
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["static", "--help"]])
+def test_help(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(argv)
+    assert e.value.code == 0 and "bearingsim" in capsys.readouterr().out

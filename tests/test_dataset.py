@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
-from bearingsim.cli import main
-from bearingsim.workflows import envelope_band
 from bearingsim.dataset import LABEL_FIELDS, draw_labels, make_dataset
+from bearingsim.errors import NotConvergedError
+from bearingsim.workflows import dataset_case, envelope_band
 from bearingsim.signal import envelope_spectrum, peak_frequency
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -146,19 +146,7 @@ def test_shipped_spec_is_valid():
     assert c.data["dataset"]["count"] == 1000 and c.data["dataset"]["chunk"] == 16
 
 
-def test_cli_bad_input(tmp_path, capsys):
-    p = tmp_path / "bad.toml"
-    p.write_text(CWRU + "\n[dataset]\ncount = 4\nspeed_rpm = [1800, 1700]\n")
-    assert main(["dataset", str(p), "-o", str(tmp_path / "x.h5")]) == 2
-    err = capsys.readouterr().err
-    assert "dataset.speed_rpm" in err and "min > max" in err
-    assert not (tmp_path / "x.h5").exists()
-    p.write_text(CWRU)
-    assert main(["dataset", str(p), "-o", str(tmp_path / "x.h5")]) == 2
-    assert "no [dataset] section" in capsys.readouterr().err
-
-
-def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch, capsys):
+def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
     """A failed item (result != 0) or a non-finite signal is written as zeros with result != 0."""
     import bearingsim.dataset as dsm
     import bearingsim.dynamics as dyn
@@ -175,11 +163,10 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(dyn, "simulate_batch", fake_batch)
     monkeypatch.setattr(dsm, "_ball_iterations", lambda *a: 3)
-    p = tmp_path / "spec.toml"
-    p.write_text(spec().text)
-    assert main(["dataset", str(p), "-o", str(tmp_path / "f.h5")]) == 0
-    err = capsys.readouterr().err
-    assert "4 of 6 items failed" in err
+    with pytest.raises(NotConvergedError, match="spec.toml: 4 of 6 items of the data set failed"):
+        dataset_case(spec(), tmp_path / "f.h5")
+    s = dataset_case(spec(), tmp_path / "f.h5", throw=False)
+    assert s.failed == 4 and s.failures == {1: 2, int(dsm.DatasetResult.nonfinite_signal): 2}
     with h5py.File(tmp_path / "f.h5", "r") as f:
         x, L = f["signals"][()], f["labels"][()]
     bad = L["result"] != 0
