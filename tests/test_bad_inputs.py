@@ -1,7 +1,6 @@
 """Every bad input answered in one voice: through the command line entry point
 ``bearingsim.cli.main``, exit code 2, one message naming the file and the key (or what is wrong
 with the file), no traceback, and no output file left behind."""
-from pathlib import Path
 
 import pytest
 
