@@ -14,33 +14,10 @@ from bearingsim.errors import InputError, InvalidStateError, NotConvergedError
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# the case of tests/test_cli.py (same shapes: its compiled programs are reused)
-BASE = """
-title = "workflow case"
-[bearing]
-balls = 16
-ball_diameter_mm = 22.225
-pitch_diameter_mm = 125.26
-inner_groove_curvature = 0.5232
-outer_groove_curvature = 0.5232
-free_contact_angle_deg = 40.0
-[operation]
-speed_rpm = 10000
-cage_angle_deg = 4.0
-hertz = "brewe-hamrock"
-[load]
-axial_N = 10000
-radial_x_N = 3000
-[defect]
-center_deg = 0.0
-extent_deg = 6.0
-depth_mm = 0.3
-profile = "ball-path"
-[sweep]
-start_deg = -11.25
-stop_deg = 11.25
-steps = 61
-"""
+# the case of tests/test_cli.py (same shapes: its compiled programs are reused), without its
+# study, at a cage angle of 4 deg and with the Brewe-Hamrock Hertz approximation
+SMALL = (ROOT / "tests" / "data" / "small_sweep.toml").read_text().split("[study]")[0]
+BASE = SMALL.replace("speed_rpm = 10000", 'speed_rpm = 10000\ncage_angle_deg = 4.0\nhertz = "brewe-hamrock"')
 
 
 def study(parameter, values):

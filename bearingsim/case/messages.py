@@ -35,20 +35,13 @@ def fmt_value(v) -> str:
     return repr(v)
 
 
+_KINDS = ((bool, "a boolean"), (int, "an integer"), (float, "a float"), (str, "a string"), (list, "an array"),
+          (dict, "a table"))
+
+
 def kind_of(v) -> str:
-    if isinstance(v, bool):
-        return "a boolean"
-    if isinstance(v, int):
-        return "an integer"
-    if isinstance(v, float):
-        return "a float"
-    if isinstance(v, str):
-        return "a string"
-    if isinstance(v, list):
-        return "an array"
-    if isinstance(v, dict):
-        return "a table"
-    return f"a {type(v).__name__}"  # dates and times
+    """What a TOML value is, for messages ("an integer", "a table", "a datetime")."""
+    return next((name for t, name in _KINDS if isinstance(v, t)), f"a {type(v).__name__}")
 
 
 def suggest(name: str, valid) -> str:
