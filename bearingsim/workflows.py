@@ -121,62 +121,41 @@ class Study:
 
 #: study keys that change the shape of the results: no rectangular (M, N, Z) array
 _SHAPE_KEYS = {"bearing.balls": "the number of balls", "sweep.steps": "the number of cage angles"}
+#: sections whose keys leave the bearing and the spall as they are: a study of one is one batch
+_BATCH_SECTIONS = ("load", "operation", "sweep")
 
 
-def _leaves_equal(a, b) -> bool:
-    import jax
-
-    la, ta = jax.tree_util.tree_flatten(a)
-    lb, tb = jax.tree_util.tree_flatten(b)
-    return ta == tb and all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(la, lb))
-
-
-def _study_inputs(c):
+def _grid(c):
     st = c.sweep_settings()
     # one uniform grid per value (no edge insertion), so the study is one rectangular array
-    return c.bearing(), c.operation(), c.loads(), c.spall(), np.linspace(st["start"], st["stop"], st["steps"])
+    return np.linspace(st["start"], st["stop"], st["steps"])
 
 
-def _batchable(inputs, cases) -> bool:
-    """All values share the bearing, the spall, the raceway control and the Hertz method: then
-    only loads, speed, the Fc/Mg switches and the cage angles differ, which ``solve_batch`` takes
-    per item."""
-    b0, op0, _, sp0, _ = inputs[0]
-    return (len({c.hertz_method for c in cases}) == 1
-            and all(op.control == op0.control for _, op, _, _, _ in inputs)
-            and all(_leaves_equal(b, b0) and _leaves_equal(sp, sp0) for b, _, _, sp, _ in inputs))
-
-
-def _stack(sols):
-    import jax
-    import jax.numpy as jnp
-
-    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
-
-
-def _study_batch(inputs, hertz_method, bar):
+def _study_batch(cases, grids, bar):
     """Every (value, cage angle) state through ``solve_batch`` in chunks of the next power of two
-    (at most :data:`STUDY_CHUNK`), the last one padded, so few batch shapes are ever compiled."""
+    (at most :data:`STUDY_CHUNK`), the last one padded, so few batch shapes are ever compiled.
+    Only loads, speed, the Fc/Mg switches and the cage angles differ between the values."""
     import jax
     import jax.numpy as jnp
 
-    from .jones import solve_batch
+    from .jones import load_vector, solve_batch
     from .kinematics import Operation
 
-    b, op0, _, spall, grid = inputs[0]
-    M, N = len(inputs), grid.size
-    per = lambda f: np.repeat(np.asarray([f(x) for x in inputs], float), N, axis=0)  # noqa: E731
-    speed, cf, gy = (per(lambda x, k=k: getattr(x[1], k)) for k in ("speed", "centrifugal", "gyroscopic"))
-    loads = per(lambda x: np.asarray(x[2]))
-    angles = np.concatenate([x[4] for x in inputs])
+    c0 = cases[0]
+    b, spall, control = c0.bearing(), c0.spall(), c0.operation().control
+    M, N = len(cases), grids[0].size
+    ops, lds = [c.si("operation") for c in cases], [c.si("load") for c in cases]
+    per_state = lambda v: np.repeat(np.asarray(v, float), N, axis=0)  # noqa: E731
+    speed, cf, gy = (per_state([o[k] for o in ops]) for k in ("speed", "centrifugal", "gyroscopic"))
+    loads = per_state(np.asarray(load_vector(**{k: np.array([d[k] for d in lds]) for k in lds[0]})).T)
+    angles = np.concatenate(grids)
     total = M * N
     chunk = min(1 << max(0, int(total - 1).bit_length()), STUDY_CHUNK)   # a power of two: few shapes
     parts = []
     for k in range(0, total, chunk):
         idx = np.minimum(np.arange(k, k + chunk), total - 1)      # pad the last chunk: one shape
-        op = Operation(speed[idx], op0.control, cf[idx], gy[idx])
-        sol = solve_batch(b, op, loads[idx], cage_angle=angles[idx], spall=spall,
-                          hertz_method=hertz_method)
+        sol = solve_batch(b, Operation(speed[idx], control, cf[idx], gy[idx]), loads[idx],
+                          cage_angle=angles[idx], spall=spall, hertz_method=c0.hertz_method)
         n = min(chunk, total - k)
         parts.append(jax.tree_util.tree_map(lambda a: a[:n], sol))
         bar.update(n)
@@ -184,21 +163,23 @@ def _study_batch(inputs, hertz_method, bar):
     return jax.tree_util.tree_map(lambda a: a.reshape((M, N) + a.shape[1:]), flat)
 
 
-def _study_sweep(x, hertz_method):
+def _study_sweep(c, grid):
     from .sweep import sweep
 
-    b, op, loads, spall, grid = x
-    return sweep(b, op, loads, spall, angles=grid, hertz_method=hertz_method)
+    return sweep(c.bearing(), c.operation(), c.loads(), c.spall(), angles=grid, hertz_method=c.hertz_method)
 
 
 def study_case(case, *, throw=True, progress=False) -> Study:
     """One cage-angle sweep (the case's ``[sweep]`` grid, no edge insertion) per ``[study]`` value.
 
-    Values that change only loads, speed, the Fc/Mg switches or the sweep angles are solved as
-    one batch (``jones.solve_batch`` over every value and angle, in chunks of STUDY_CHUNK states;
-    a value with a state that fails there is redone by continuation); other keys (geometry,
-    material, spall) run one compiled sweep per value.  Raises InputError without ``[study]`` or
-    for a key that changes the shape of the results (``bearing.balls``, ``sweep.steps``)."""
+    Studies of a ``[load]``, ``[operation]`` or ``[sweep]`` key (loads, speed, the sweep angles)
+    are solved as one batch: ``jones.solve_batch`` over every value and angle, in chunks of at
+    most STUDY_CHUNK states (a value with a state that fails there is redone by continuation).
+    Other keys (geometry, material, spall) run one compiled sweep per value.  Raises InputError
+    without ``[study]`` or for a key that changes the shape of the results (``bearing.balls``,
+    ``sweep.steps``)."""
+    import jax
+
     spec = case.study_settings()
     if spec is None:
         raise InputError(f"{case.source}: no [study] section: add one, e.g.\n[study]\n"
@@ -208,31 +189,33 @@ def study_case(case, *, throw=True, progress=False) -> Study:
         raise InputError(f"{case.source}: study.parameter = '{param}' changes {_SHAPE_KEYS[param]} "
                          "and so the shape of every result; run one sweep per value instead")
     cases = case.study_cases()
-    inputs = [_study_inputs(c) for c in cases]
-    hertz = cases[0].hertz_method
-    batched = _batchable(inputs, cases)
-    total = len(inputs) * inputs[0][4].size
-    bar = _progress(total, f"study {param}", "state", progress)
+    grids = [_grid(c) for c in cases]
+    batched = param.split(".")[0] in _BATCH_SECTIONS
+    bar = _progress(len(cases) * grids[0].size, f"study {param}", "state", progress)
     try:
         if batched:
-            sol = _study_batch(inputs, hertz, bar)
+            sol = _study_batch(cases, grids, bar)
             for m in np.flatnonzero(np.any(np.asarray(sol.result) != 0, axis=1)):
-                redo = _study_sweep(inputs[m], hertz)
-                sol = _replace_row(sol, int(m), redo)
+                sol = _replace_row(sol, int(m), _study_sweep(cases[m], grids[m]))
         else:
             rows = []
-            for x, c in zip(inputs, cases):
-                rows.append(_study_sweep(x, c.hertz_method))
-                bar.update(x[4].size)
+            for c, grid in zip(cases, grids):
+                rows.append(_study_sweep(c, grid))
+                bar.update(grid.size)
             sol = _stack(rows)
     finally:
         bar.close()
     if throw:                                     # raise_for describes a flat batch
-        import jax
-
         _check(jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), sol), case,
                f"the study of {param}", throw)
     return Study(param, list(values), unit_of(param), sol, batched)
+
+
+def _stack(sols):
+    import jax
+    import jax.numpy as jnp
+
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
 
 
 def _replace_row(sol, m, row):

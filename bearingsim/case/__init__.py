@@ -136,8 +136,9 @@ class Case:
         return [base_case.with_value(param, v) for v in values]
 
     # -- SI objects -----------------------------------------------------------------------------
-    def _si(self, path: str) -> dict:
-        """Section ``path`` in SI, keys without their unit suffix."""
+    def si(self, path: str) -> dict:
+        """Section ``path`` in SI, keys without their unit suffix (``si("load")["axial"]`` in N,
+        ``si("operation")["speed"]`` in rad/s); the section's other keys as they are."""
         sec = section_raw(self.data, path) or {}
         out = {}
         for key, spec in SCHEMA[path].keys.items():
@@ -149,13 +150,13 @@ class Case:
 
     def _material(self, path: str):
         from ..geometry import Material
-        m = self._si(path)
+        m = self.si(path)
         return Material(m["youngs_modulus"], m["poisson_ratio"], m["density"])
 
     def bearing(self):
         """:class:`bearingsim.Bearing` in SI."""
         from ..geometry import Bearing
-        b = self._si("bearing")
+        b = self.si("bearing")
         rings = self._material("material")
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
         args = (b["balls"], b["ball_diameter"], b["pitch_diameter"], b["inner_groove_curvature"],
@@ -179,12 +180,12 @@ class Case:
     @property
     def cage_angle(self) -> float:
         """Cage angle theta_c (rad)."""
-        return self._si("operation")["cage_angle"]
+        return self.si("operation")["cage_angle"]
 
     def loads(self):
         """Inner-ring loads [Fx, Fy, Fz, Mx, My] (N, N m) as a float64 jax array."""
         from ..jones import load_vector
-        ld = self._si("load")
+        ld = self.si("load")
         return load_vector(axial=ld["axial"], radial_x=ld["radial_x"], radial_y=ld["radial_y"],
                            moment_x=ld["moment_x"], moment_y=ld["moment_y"])
 
@@ -193,14 +194,14 @@ class Case:
         from ..defect import Spall
         if "defect" not in self.data:
             return None
-        d = self._si("defect")
+        d = self.si("defect")
         if "length" in d:
             return Spall.from_length(self.bearing(), d["center"], d["length"], d["depth"], d["profile"])
         return Spall(d["center"], d["extent"], d["depth"], d["profile"])
 
     def sweep_settings(self) -> dict:
         """dict(start=rad, stop=rad, steps=int); defaults: 0, one ball pitch 2 pi / Z, 181."""
-        return self._si("sweep")
+        return self.si("sweep")
 
     def study_settings(self):
         """(parameter, values) with values in the key's unit as in the file, or None."""
@@ -213,11 +214,11 @@ class Case:
         """The [dataset] keys in SI without unit suffix (ranges as [min, max]), or None."""
         if "dataset" not in self.data:
             return None
-        return self._si("dataset")
+        return self.si("dataset")
 
     def dynamics_settings(self) -> dict:
         """The [dynamics] keys in SI without unit suffix: dict(duration=s, sample_rate=Hz, ...)."""
-        return self._si("dynamics")
+        return self.si("dynamics")
 
 
 def _case_from_raw(raw: dict, text: str, source: str) -> Case:
