@@ -64,8 +64,8 @@ __all__ = [
 ]
 
 #: largest contact deformation a valid state may hold, as a fraction of the ball diameter D.
-#: Hertz theory is a small-strain, half-space theory; at 1 % of D the peak pressure is about
-#: twice the 4.2 GPa static-capacity stress and the steel has yielded.
+#: Hertz theory is a small-strain, half-space theory; at 1 % of D the peak pressure is 6-8 GPa
+#: (Harris 218: 6.6 GPa), 1.5-2x the 4.2 GPa static-capacity stress: the steel has yielded.
 DEFORMATION_LIMIT = 0.01
 #: peak contact pressure (Pa) above which a state is flagged ``overloaded`` (a warning): the
 #: ISO 76 basic static load rating stress of ball bearings, where permanent deformation of
@@ -73,6 +73,7 @@ DEFORMATION_LIMIT = 0.01
 PRESSURE_WARNING = 4.2e9
 
 _LS_STEPS = 12
+_FREE_STEPS = 12        # full Newton steps accepted without a descent test
 _RING_CAP = 200.0          # um (or um at R_i) per Newton step
 _BALL_CAP = 2e-3           # x D per Newton step
 
@@ -257,6 +258,7 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
     bearing = pb.bearing
     ball_cap = _BALL_CAP * bearing.ball_diameter / UM
     defect = pb.defect
+    static = pb.op.speed == 0.0
 
     def direction(piece):
         dq, dY, dYu, _ = _direction(pb, piece)
@@ -273,13 +275,27 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
         qz = c["qz"] + t * c["dq"]
         Y = lift_onto_outer(bearing, c["Y"] + t * c["dY"], d_c, pb.H_outer)
         Yu = lift_onto_outer(bearing, c["Yu"] + t * c["dYu"], d_cu, 0.0) if defect else None
+        # at rest the balls are eliminated exactly: the closed form (rigid-ring static model)
+        Y = jnp.where(static, _closed_form_balls(pb, qz)[0], Y)
+        if defect:
+            Yu = jnp.where(static, _closed_form_balls(pb, qz, True)[0], Yu)
         piece = _evaluate(pb, qz, Y, Yu)
         m = _merit(piece)
         dq, dY, dYu, sn = direction(piece)
         finite = jnp.isfinite(m) & jnp.isfinite(sn)
-        # accept when the residual or the Newton step (natural monotonicity, Deuflhard) shrinks:
-        # the residual alone mixes ball and ring scales and rejects good full steps
-        ok = first | (finite & ((m <= (1.0 - 1e-4 * t) * c["m"]) | (sn <= (1.0 - 0.25 * t) * c["sn"])))
+        # natural monotonicity (Deuflhard): the simplified Newton correction (old Jacobian, new
+        # residual) must shrink; or the residual must.  The residual alone mixes ball and ring
+        # scales and rejects good full steps.
+        sq, sY, sYu, _ = _direction(pb, piece, c["jac"])
+        ss = jnp.maximum(jnp.max(jnp.abs(sq)), jnp.max(jnp.abs(sY)))
+        if defect:
+            ss = jnp.maximum(ss, jnp.max(jnp.abs(sYu)))
+        # The first _FREE_STEPS full (capped) steps are taken as they come unless they blow up:
+        # far from the root (a static start at high speed, balls changing contact) the residual
+        # rises on the way; a monotone search from the start stalls there.
+        free = (c["it"] < _FREE_STEPS) & (t == 1.0) & (m <= 1e6 * c["m"])
+        ok = first | (finite & (free | (m <= (1.0 - 1e-4 * t) * c["m"])
+                                | (ss <= (1.0 - 0.25 * t) * c["sn"])))
         sel = lambda new, old: jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, old)
         jac = {k: piece[k] for k in _JAC_KEYS if k in piece}
         new = dict(qz=qz, Y=Y, dq=dq, dY=dY, m=m, sn=sn, jac=jac)

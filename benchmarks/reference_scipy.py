@@ -19,7 +19,9 @@ Contents
 
 Conventions (adopted project-wide)
 ----------------------------------
-(a) Q = K delta^1.5 for delta > 0, else 0.
+(a) Q = K delta^1.5 for delta > 0 and a contact normal that points into its raceway
+    (cos alpha > 0), else 0 (MODEL.md section 3: a ball pushed past the inner groove-curvature
+    centre has lost its inner contact; it never acts as a tie).
 (b) The friction / gyroscopic terms lambda (M_g / D) act exactly as MODEL.md writes them, for
     every ball.  (A gate "only at a loaded contact" was tried first: under inner control it
     leaves the model without a solution when a ball leaves its inner raceway, see below.)
@@ -380,8 +382,8 @@ def _ball_state(ctx: _Ctx, X1, X2, A1, A2, H, omega, om_override=None):
     sai, cai = (A1 - X1) / Li, (A2 - X2) / Li
     Ki = hertz_constant(geom, ai, True)
     Ko = hertz_constant(geom, ao, False)
-    Qi = np.where(di > 0.0, Ki * np.maximum(di, 0.0) ** 1.5, 0.0)
-    Qo = np.where(do > 0.0, Ko * np.maximum(do, 0.0) ** 1.5, 0.0)
+    Qi = np.where((di > 0.0) & (cai > 0.0), Ki * np.maximum(di, 0.0) ** 1.5, 0.0)
+    Qo = np.where((do > 0.0) & (cao > 0.0), Ko * np.maximum(do, 0.0) ** 1.5, 0.0)
     beta, om_m, om_R = kinematics(geom, ai, ao, omega, ctx.control)
     Fc = ctx.cf * 0.5 * geom.mass * geom.dm * om_m ** 2
     Mg = ctx.gy * geom.inertia * om_R * om_m * np.sin(beta)
@@ -484,7 +486,7 @@ def _override(ctx: _Ctx, X1, X2, A1, A2, H):
     if ctx.omega == 0.0 or not np.any(H > 0.0):
         return None
     di = np.hypot(A1 - X1, A2 - X2) - (ctx.geom.fi - 0.5) * ctx.geom.D
-    drop = (H > 0.0) & (di <= 0.0)
+    drop = (H > 0.0) & ~((di > 0.0) & (A2 - X2 > 0.0))      # no inner contact (rule (a))
     if not np.any(drop):
         return None
     override = np.full(np.shape(X1), np.nan)

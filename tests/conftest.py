@@ -1,7 +1,10 @@
+"""Shared fixtures and independent checks (numpy re-derivations of MODEL.md section 4)."""
 import numpy as np
 import pytest
 
 import bearingsim as bs
+
+DEG = np.pi / 180
 
 
 def harris218(n_balls=16, **kw):
@@ -12,3 +15,42 @@ def harris218(n_balls=16, **kw):
 @pytest.fixture(scope="session")
 def b218():
     return harris218()
+
+
+def _ball_forces(b, sol, op):
+    """(G, H, m, r1, r2) per ball, re-derived in numpy from the reported angles and loads."""
+    lam_i, lam_o = op.factors
+    D = float(b.ball_diameter)
+    ai, ao, Qi, Qo, Mg, Fc = (np.asarray(x) for x in (sol.alpha_inner, sol.alpha_outer, sol.Q_inner,
+                                                         sol.Q_outer, sol.gyroscopic_moment, sol.centrifugal))
+    G = Qi * np.sin(ai) + lam_i * Mg / D * np.cos(ai)
+    H = Qi * np.cos(ai) - lam_i * Mg / D * np.sin(ai)
+    m = float(b.inner_groove_radius) * G - lam_i * float(b.f_inner) * Mg
+    r1 = G - Qo * np.sin(ao) - lam_o * Mg / D * np.cos(ao)
+    r2 = H - Qo * np.cos(ao) + lam_o * Mg / D * np.sin(ao) + Fc
+    return G, H, m, r1, r2
+
+
+def equilibrium_error(b, sol, op):
+    """Ring equilibrium from the reported per-ball values, relative to the largest applied load
+    (moments divided by R_i)."""
+    G, H, m, _, _ = _ball_forces(b, sol, op)
+    psi = np.asarray(sol.azimuth)
+    R = np.array([np.sum(H * np.cos(psi)), np.sum(H * np.sin(psi)), np.sum(G),
+                  np.sum(m * np.sin(psi)), -np.sum(m * np.cos(psi))])
+    F = np.asarray(sol.loads)
+    scale = np.array([1, 1, 1, 1 / float(b.inner_groove_radius), 1 / float(b.inner_groove_radius)])
+    return np.max(np.abs((R - F) * scale)) / np.max(np.abs(F * scale))
+
+
+def ball_equilibrium_error(b, sol, op):
+    """Largest ball equilibrium residual relative to the largest outer contact load."""
+    _, _, _, r1, r2 = _ball_forces(b, sol, op)
+    return max(np.max(np.abs(r1)), np.max(np.abs(r2))) / max(float(np.max(np.asarray(sol.Q_outer))), 1.0)
+
+
+def inverted_contacts(sol):
+    """Number of loaded contacts whose normal points out of the raceway (MODEL.md section 3)."""
+    ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
+    Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
+    return int(np.sum((Qi > 0) & (np.cos(ai) <= 0)) + np.sum((Qo > 0) & (np.cos(ao) <= 0)))

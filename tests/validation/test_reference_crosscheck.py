@@ -22,7 +22,7 @@ import pytest
 
 import bearingsim as bs
 
-_REF_PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "reference_scipy.py"
+_REF_PATH = pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "reference_scipy.py"
 _spec = importlib.util.spec_from_file_location("reference_scipy", _REF_PATH)
 ref = importlib.util.module_from_spec(_spec)
 sys.modules.setdefault("reference_scipy", ref)
@@ -65,6 +65,13 @@ CASES = [
     ("spall-ball-path-exit-10000rpm", H218,
      dict(loads=[4000, 0, 10000, 0, 0], speed_rpm=10000, cage_angle=math.radians(2.8125),
           spall=dict(SPALL, profile="ball-path"))),
+    # issue 8: a ball pushed past the inner groove-curvature centre by a 0.5 mm ball-path spall
+    # (the old solver reported it as a 31 kN tie); MODEL.md section 3 contact rule on both sides
+    ("issue8-deep-ball-path-spall-7600rpm", ref.Geometry(14, 10.63e-3, 52.65e-3, 0.517, 0.536,
+                                                          math.radians(14.8)),
+     dict(loads=[-5042, 2840, 2210, -9.27, -1.18], speed_rpm=7600, cage_angle=math.radians(4.01),
+          spall=dict(center=math.radians(5.38), extent=math.radians(11.3), depth=0.5e-3,
+                     profile="ball-path"))),
 ]
 
 
