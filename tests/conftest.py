@@ -33,14 +33,15 @@ def _ball_forces(b, sol, op):
 
 def equilibrium_error(b, sol, op):
     """Ring equilibrium from the reported per-ball values, relative to the largest applied load
-    (moments divided by R_i)."""
+    (moments divided by R_i) or contact load (or 1 N, for a bearing with no load at all)."""
     G, H, m, _, _ = _ball_forces(b, sol, op)
     psi = np.asarray(sol.azimuth)
     R = np.array([np.sum(H * np.cos(psi)), np.sum(H * np.sin(psi)), np.sum(G),
                   np.sum(m * np.sin(psi)), -np.sum(m * np.cos(psi))])
     F = np.asarray(sol.loads)
     scale = np.array([1, 1, 1, 1 / float(b.inner_groove_radius), 1 / float(b.inner_groove_radius)])
-    return np.max(np.abs((R - F) * scale)) / np.max(np.abs(F * scale))
+    ref = max(np.max(np.abs(F * scale)), float(np.max(np.asarray(sol.Q_outer))), 1.0)
+    return np.max(np.abs((R - F) * scale)) / ref
 
 
 def ball_equilibrium_error(b, sol, op):
