@@ -1,4 +1,4 @@
-"""Outer-raceway spall (MODEL.md section 5) and cage-angle sweeps (section 6)."""
+"""Outer-raceway spall (MODEL.md section 5): depth profiles and the spalled quasi-static state."""
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -7,18 +7,10 @@ import pytest
 import bearingsim as bs
 from bearingsim import jones
 from bearingsim.defect import depth_profile, wrap_angle
-from bearingsim.sweep import spall_edge_angles, sweep, sweep_angles
-from conftest import harris218
-from test_jones import ball_equilibrium_error, equilibrium_error
+from conftest import ball_equilibrium_error, equilibrium_error
 
 DEG = np.pi / 180
-N = 61                                  # one sweep length for every test: one compilation
 LOADS = bs.Loads(axial=10000.0, radial_x=3000.0)
-PITCH = 2 * np.pi / 16
-
-
-def grid(center=0.0):
-    return np.linspace(center - PITCH / 2, center + PITCH / 2, N)
 
 
 # ------------------------------------------------------------------------------ profile
@@ -111,61 +103,6 @@ def test_solution_is_differentiable_wrt_spall_depth(b218):
     sp_ = lambda d: bs.solve(b218, op, LOADS, spall=bs.Spall(0.0, 3 * DEG, d, "ball-path")).displacement
     fd = (np.asarray(sp_(0.02e-3 + h)) - np.asarray(sp_(0.02e-3 - h))) / (2 * h)
     np.testing.assert_allclose(dqdd[:3], fd[:3], rtol=1e-4, atol=1e-6)
-
-
-# ------------------------------------------------------------------------------ sweeps
-@pytest.fixture(scope="module")
-def sweeps(b218):
-    out = {}
-    for rpm in (0.0, 10000.0):
-        op = bs.Operation.from_rpm(rpm)
-        for prof in ("ball-path", "rectangular"):
-            out[rpm, prof] = sweep(b218, op, LOADS, bs.Spall(0.0, 6 * DEG, 0.3e-3, prof), angles=grid())
-    return out
-
-
-def test_sweeps_converge_with_global_equilibrium_everywhere(b218, sweeps):
-    for (rpm, prof), s in sweeps.items():
-        op = bs.Operation.from_rpm(rpm)
-        assert np.all(np.asarray(s.result) == 0), (rpm, prof)
-        for n in range(0, N, 6):
-            one = jax.tree_util.tree_map(lambda a: a[n], s)
-            assert equilibrium_error(b218, one, op) <= 1e-9
-            assert ball_equilibrium_error(b218, one, op) <= 1e-9
-
-
-def test_one_pitch_periodicity_with_balls_relabelled(b218, sweeps):
-    s = sweeps[10000.0, "ball-path"]
-    first = jax.tree_util.tree_map(lambda a: a[0], s)     # theta = -pitch/2
-    last = jax.tree_util.tree_map(lambda a: a[-1], s)     # theta = +pitch/2
-    for f in ("Q_inner", "Q_outer", "alpha_inner", "alpha_outer"):
-        np.testing.assert_allclose(np.roll(np.asarray(getattr(last, f)), 1), getattr(first, f), rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(last.displacement, first.displacement, rtol=1e-9, atol=1e-14)
-
-
-def test_ball_path_sweep_is_continuous_rectangular_jumps(b218):
-    """Refine the grid across the entry edge (-3 deg): the ball-path jump shrinks with the grid,
-    the rectangular jump does not."""
-    op = bs.Operation.from_rpm(10000.0)
-    fine = np.linspace(3 * DEG - 0.15 * DEG, 3 * DEG + 0.6 * DEG, N)   # ball 0 enters at theta = ... ; ball at -3 deg
-    fine = -fine
-    out = {}
-    for prof in ("ball-path", "rectangular"):
-        s = sweep(b218, op, LOADS, bs.Spall(0.0, 6 * DEG, 0.3e-3, prof), angles=fine)
-        assert np.all(np.asarray(s.result) == 0)
-        scale = float(np.max(s.Q_outer))
-        out[prof] = np.max(np.abs(np.diff(np.asarray(s.Q_outer), axis=0))) / scale
-    assert out["rectangular"] > 0.2              # a ball drops into the recess at once
-    assert out["ball-path"] < 0.05               # it pivots in over the edge instead
-
-
-def test_rectangular_edges_are_inserted(b218):
-    sp = bs.Spall(0.0, 6 * DEG, 0.3e-3, "rectangular")
-    ang = sweep_angles(b218, sp, -PITCH / 2, PITCH / 2, 11)
-    edges = spall_edge_angles(b218, sp, -PITCH / 2, PITCH / 2)
-    np.testing.assert_allclose(sorted(edges), [-3 * DEG, 3 * DEG], atol=1e-12)
-    for e in edges:
-        assert np.any(np.abs(ang - (e - 1e-7)) < 1e-12) and np.any(np.abs(ang - (e + 1e-7)) < 1e-12)
 
 
 # ------------------------------------------------------------------------------ seed findings

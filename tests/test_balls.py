@@ -1,0 +1,107 @@
+"""The per-ball kernel (bearingsim.balls, MODEL.md sections 3-5) against independent forms."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import bearingsim as bs
+from bearingsim import balls
+from bearingsim.hertz import stiffness_curve
+from conftest import DEG
+
+OP = bs.Operation.from_rpm(10000.0)
+
+
+def test_transcendental_free_kinematics_equal_the_angle_form(b218):
+    """ball_kinematics_cs (sines and cosines only) against MODEL.md's formulas written with
+    arctan and cos(alpha - beta) in numpy, for every control and angles across 0-100 deg."""
+    rng = np.random.default_rng(1)
+    ai, ao = np.radians(rng.uniform(0, 100, 50)), np.radians(rng.uniform(0, 80, 50))
+    g, w = float(b218.g), float(OP.speed)
+    for control in ("outer", "inner", "equal"):
+        beta = np.arctan2(np.sin(ai), np.cos(ai) - g) if control == "inner" else \
+            np.arctan2(np.sin(ao), np.cos(ao) + g)
+        ki = (1 - g * np.cos(ai)) / np.cos(ai - beta)
+        ko = (1 + g * np.cos(ao)) / np.cos(ao - beta)
+        wm = w * ki / (ki + ko)
+        kin = bs.ball_kinematics(b218, bs.Operation.from_rpm(10000.0, control), ai, ao)
+        ok = np.abs(np.cos(ai - beta)) > 0.05        # away from the cleared 0/0 at 90 deg
+        np.testing.assert_allclose(np.asarray(kin.beta), beta, rtol=1e-13, atol=1e-14)
+        np.testing.assert_allclose(np.asarray(kin.orbital_speed)[ok], wm[ok], rtol=1e-12)
+
+
+def test_ball_equations_have_no_transcendental_functions(b218):
+    """The solvers' inner loop: per ball only +, *, /, sqrt (and selects) -- no sin, cos, atan2,
+    pow.  (Scalar geometry constants such as R_i = d_m/2 + (f_i - 1/2) D cos(alpha_0) are
+    computed once, outside the vmapped per-ball work.)"""
+    curve = stiffness_curve(b218)
+    f = lambda v: balls.ball_equations(b218, OP, curve, v, 1e-5, 0.0, 500.0)[0]
+    jaxpr = jax.make_jaxpr(jax.vmap(jax.jacfwd(f)))(jnp.ones((16, 4)))
+    banned = {"sin", "cos", "tan", "atan2", "atan", "asin", "acos", "pow", "exp", "log", "cbrt"}
+    per_ball = []
+
+    def walk(j):
+        for e in j.eqns:
+            if str(e.primitive) in banned and any(getattr(v.aval, "shape", ()) for v in e.invars):
+                per_ball.append(str(e.primitive))
+            for p in e.params.values():
+                if hasattr(p, "jaxpr"):
+                    walk(p.jaxpr)
+    walk(jaxpr.jaxpr)
+    assert not per_ball, per_ball
+
+
+def test_contact_rule_no_tie_past_the_inner_groove_centre(b218):
+    """MODEL.md 3: a ball whose centre is past the inner groove-curvature centre overlaps the
+    inner raceway's sphere (delta_i > 0) with the normal pointing out of the raceway: Q_i = 0."""
+    curve = stiffness_curve(b218)
+    a0 = float(b218.free_contact_angle)
+    A = float(b218.A)
+    A1, A2 = A * np.sin(a0), A * np.cos(a0)
+    # ball centre 1.3 mm beyond the outer groove centre's unloaded position, past (A1, A2)
+    L = (float(b218.f_outer) - 0.5) * float(b218.ball_diameter) + 1.3e-3
+    x = jnp.array([L * np.sin(a0), L * np.cos(a0)])
+    st = balls.ball_state(b218, bs.Operation.from_rpm(0.0), x, A1, A2, curve, H_outer=1.3e-3)
+    assert float(st.delta_inner) > 0 and np.cos(float(st.alpha_inner)) < 0
+    assert float(st.Q_inner) == 0.0
+    # the same overlap with the normal into the raceway is loaded
+    x2 = jnp.array([A1, A2]) - (x - jnp.array([A1, A2]))
+    st2 = balls.ball_state(b218, bs.Operation.from_rpm(0.0), x2, A1, A2, curve)
+    assert float(st2.Q_inner) > 0
+
+
+@pytest.mark.parametrize("H", [0.0, 5e-6])
+def test_static_closed_form_is_the_exact_ball_equilibrium_at_rest(b218, H):
+    curve = stiffness_curve(b218)
+    op = bs.Operation.from_rpm(0.0)
+    A1, A2 = balls.groove_centre_offsets(b218, jnp.array([20e-6, 0, 30e-6, 0, 0]), 0.0)
+    x, d_c = balls.static_ball_position(b218, op, A1, A2, curve, H)
+    st = balls.ball_state(b218, op, x, A1, A2, curve, H)
+    assert float(d_c) == 0.0 and float(st.Q_inner) > 100.0
+    assert abs(float(st.r_axial)) < 1e-9 * float(st.Q_inner)
+    assert abs(float(st.r_radial)) < 1e-9 * float(st.Q_inner)
+    assert float(st.alpha_inner) == pytest.approx(float(st.alpha_outer), abs=1e-13)
+
+
+def test_fixed_step_ball_solver_converges_to_the_exact_one(b218):
+    """A few Newton steps from the closed form reach the exact ball equilibrium (dynamics'
+    solver): 3 steps to 1e-5 of the ball load (measured 2.8e-6), 6 to round-off."""
+    curve = stiffness_curve(b218)
+    A1, A2 = balls.groove_centre_offsets(b218, jnp.array([20e-6, 0, 30e-6, 0, 0]), 0.3)
+    exact = balls.solve_ball(b218, OP, A1, A2, curve)
+    st = balls.ball_state(b218, OP, exact, A1, A2, curve)
+    assert max(abs(float(st.r_axial)), abs(float(st.r_radial))) < 1e-9 * float(st.Q_outer)
+    for n, tol in ((3, 1e-5), (6, 1e-12)):
+        x = balls.solve_ball_fixed(b218, OP, A1, A2, curve, iterations=n)
+        s = balls.ball_state(b218, OP, x, A1, A2, curve)
+        assert abs(float(s.Q_outer) - float(st.Q_outer)) < tol * float(st.Q_outer), n
+
+
+def test_balls_at_ring_loads_equal_the_solved_state(b218):
+    """The load-displacement map at a converged ring displacement returns the applied loads."""
+    loads = bs.Loads(axial=9000.0, radial_x=2000.0, moment_y=40.0)
+    sol = bs.solve(b218, OP, loads, cage_angle=0.2)
+    st = bs.balls_at(b218, OP, sol.displacement, sol.azimuth, stiffness_curve(b218))
+    R = np.asarray(bs.reactions_from_balls(st, sol.azimuth))
+    np.testing.assert_allclose(R, np.asarray(loads), rtol=1e-9, atol=1e-7)
+    np.testing.assert_allclose(np.asarray(st.Q_inner), np.asarray(sol.Q_inner), rtol=1e-9)
