@@ -10,8 +10,8 @@ Harris 218 at 10 000 rpm, outer raceway control, loads around Fa = 22 250 N + Fr
   (c) bearingsim.solve_batch on an (N_BATCH, 5) load array, time per state after compilation;
   (d) first-call compile time of bearingsim.solve and of bearingsim.solve_batch.
 
-Prints a table and the ratios: per-state speed-up of (c) over (a) (target >= 200x) and the
-compile time (target <= 10 s).  Usage: python benchmarks/bench_static.py [--n-batch 1000]
+Prints a table and the ratios: per-state speed-up of (c) over (a) (target >= 300x), of (b) over
+(a) (target >= 60x).  Compile times in a fresh process with an empty cache: bench_compile.py.  Usage: python benchmarks/bench_static.py [--n-batch 1000]
 """
 from __future__ import annotations
 
@@ -142,14 +142,16 @@ def main(argv=None):
     print(f"{'(d) compile, bearingsim.solve first call':<52}{t_compile_single:>12.2f} s")
     print(f"{'    compile, bearingsim.solve_batch first call':<52}{t_compile_batch:>12.2f} s")
     print("-" * 78)
-    print(f"speed-up (b) single vs (a) scipy:       {per_ref / per_bs:10.1f} x")
+    ss = per_ref / per_bs
+    print(f"speed-up (b) single vs (a) scipy:       {ss:10.1f} x   (target >= 60 x: "
+          f"{'met' if ss >= 60 else 'NOT met'})")
     sp = per_ref / per_batch
-    print(f"speed-up (c) batched vs (a) scipy:      {sp:10.1f} x   (target >= 200 x: "
-          f"{'met' if sp >= 200 else 'NOT met'})")
+    print(f"speed-up (c) batched vs (a) scipy:      {sp:10.1f} x   (target >= 300 x: "
+          f"{'met' if sp >= 300 else 'NOT met'})")
     ct = max(t_compile_single, t_compile_batch)
     print(f"speed-up (c) batched vs (a') naive scipy: {np.mean(t_naive) / per_batch:8.1f} x")
-    print(f"compile time (max of single, batch):    {ct:10.2f} s   (target <= 10 s: "
-          f"{'met' if ct <= 10 else 'NOT met'})")
+    print(f"compile time (max of single, batch):    {ct:10.2f} s   (with this process's cache "
+          "settings; empty-cache figures: bench_compile.py)")
     print(f"(b) vs (a): max |d alpha_i| {da:.2e} deg, max |d Q_o|/Q_o,max {dQ:.2e}")
     return dict(per_ref=per_ref, per_bs=per_bs, per_batch=per_batch, compile_single=t_compile_single,
                 compile_batch=t_compile_batch, speedup=sp)
