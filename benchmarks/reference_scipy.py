@@ -29,10 +29,15 @@ Conventions (adopted project-wide)
     put at the collinear mid-gap position (delta_o = delta_i = half the negative total) and its
     two equations are replaced by that closed form (residual = X - X_mid, in micrometres).
 (d) Spall: delta_o = L_o - (f_o - 1/2) D - H(psi_j), R_o = (d_m + D cos alpha0)/2.  A ball over
-    the spall (H > 0) that has lost its inner contact (delta_i <= 0) takes, for F_c and M_g, the
-    orbital speed of its UNDROPPED position (same ball, same q, ball problem solved with H = 0);
-    F_c and M_g are then its own-angle values times (omega_m_undropped / omega_m_own)^2, and its
-    reported omega_m is the undropped one.
+    the spall (H > 0) that has lost its inner contact (rule (a): delta_i <= 0 or cos alpha_i <= 0)
+    takes, for F_c and M_g, the orbital speed of its UNDROPPED position (same ball, same q,
+    ball problem solved with H = 0);
+    F_c and M_g are evaluated at that orbital speed with the ball's own alpha_o and beta
+    (M_g = J omega_R omega_m sin beta, omega_R / omega_m = n_o / (g c_o)), which equals its
+    own-angle values times (omega_m_undropped / omega_m_own)^2 wherever its own omega_m is
+    finite; its reported omega_m (and omega_R) are the undropped ones.  Its own omega_m is never
+    used: a ball pushed past the inner groove centre has alpha_i near 180 deg, and exactly on the
+    line of the groove centres (the collinear static start) it is 0/0.
 (e) Outputs per ball: alpha_i, alpha_o, Q_i, Q_o, delta_i, delta_o, F_c, M_g, omega_m (and more);
     q = [dx, dy, dz, theta_x, theta_y]; cage speed = mean omega_m.
 
@@ -384,16 +389,30 @@ def _ball_state(ctx: _Ctx, X1, X2, A1, A2, H, omega, om_override=None):
     Ko = hertz_constant(geom, ao, False)
     Qi = np.where((di > 0.0) & (cai > 0.0), Ki * np.maximum(di, 0.0) ** 1.5, 0.0)
     Qo = np.where((do > 0.0) & (cao > 0.0), Ko * np.maximum(do, 0.0) ** 1.5, 0.0)
-    beta, om_m, om_R = kinematics(geom, ai, ao, omega, ctx.control)
+    use = np.zeros(np.shape(ai), dtype=bool) if om_override is None else np.isfinite(om_override)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # a ball without inner contact deep in a spall can sit exactly past the inner groove
+        # centre on the line of the groove centres (alpha_i = alpha_o - 180 deg): its own
+        # omega_m is then 0/0 and is not used (convention (d)); keep it out of the arithmetic
+        beta, om_m, om_R = kinematics(geom, ai, ao, omega, ctx.control)
+    om_m = np.where(use, 0.0, om_m)
+    om_R = np.where(use, 0.0, om_R)
     Fc = ctx.cf * 0.5 * geom.mass * geom.dm * om_m ** 2
     Mg = ctx.gy * geom.inertia * om_R * om_m * np.sin(beta)
     if om_override is not None:
-        use = np.isfinite(om_override)
+        # convention (d): omega_m is the undropped one; F_c and M_g as MODEL.md writes them at
+        # that orbital speed and the ball's own angles.  M_g = J omega_R omega_m sin(beta) with
+        # omega_R / omega_m = n_o / (g c_o) (independent of alpha_i; = own-angle values times
+        # (omega_m_undropped / omega_m_own)^2 wherever the latter is finite)
+        ov = np.where(use, om_override, 0.0)
+        n_o = 1.0 + geom.g * np.cos(ao)
+        c_o = np.cos(ao - beta)
         with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.where(use, (om_override / np.where(om_m != 0, om_m, 1.0)) ** 2, 1.0)
-        Fc = Fc * ratio
-        Mg = Mg * ratio
-        om_m = np.where(use, om_override, om_m)
+            spin = np.where(use, n_o / (geom.g * np.where(c_o != 0.0, c_o, 1.0)), 0.0)
+        Fc = np.where(use, ctx.cf * 0.5 * geom.mass * geom.dm * ov ** 2, Fc)
+        Mg = np.where(use, ctx.gy * geom.inertia * ov ** 2 * spin * np.sin(beta), Mg)
+        om_R = np.where(use, ov * spin, om_R)
+        om_m = np.where(use, ov, om_m)
     lam_i, lam_o = CONTROLS[ctx.control]
     li = lam_i   # MODEL.md section 4 as written: the friction terms act for every ball
     lo = lam_o
@@ -670,7 +689,10 @@ def _root(ctx: _Ctx, u0):
     sol = optimize.root(lambda u: _evaluate(u, ctx)[0], u0, method="hybr", jac=jac,
                         options=dict(xtol=1e-13, maxfev=200 * (2 * ctx.geom.Z + 5)))
     r, st = _evaluate(sol.x, ctx)
-    return sol.x, _residual_N(r, st, ctx.geom.Z), int(sol.nfev) + 8 * int(getattr(sol, "njev", 0))
+    res = _residual_N(r, st, ctx.geom.Z)
+    if not np.isfinite(res):
+        res = np.inf        # a NaN would make every later "better than" test of the fallbacks False
+    return sol.x, res, int(sol.nfev) + 8 * int(getattr(sol, "njev", 0))
 
 
 def solve(geom: Geometry, loads, speed_rpm=0.0, control="outer", centrifugal=True,

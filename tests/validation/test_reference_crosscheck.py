@@ -73,6 +73,14 @@ CASES = [
           spall=dict(center=math.radians(5.38), extent=math.radians(11.3), depth=0.5e-3,
                      profile="ball-path"))),
 ]
+# issue 8 variants: cage 0 deg (ball 0 at the entry edge, H = 2 um, in inner contact), 8 deg
+# (H = 267 um sag-limited, past the inner groove centre, alpha_o = 0, Q_o = F_c), 20 deg (no ball
+# over the spall), and depth 0.3 mm at 4.01 deg (past the inner groove centre)
+_I8 = CASES[-1]
+for _name, _cage, _depth in (("cage0", 0.0, 0.5e-3), ("cage8", 8.0, 0.5e-3),
+                             ("cage20", 20.0, 0.5e-3), ("depth0.3mm", 4.01, 0.3e-3)):
+    CASES.append((f"issue8-{_name}", _I8[1],
+                  dict(_I8[2], cage_angle=math.radians(_cage), spall=dict(_I8[2]["spall"], depth=_depth))))
 
 
 def _bearing(geom):
