@@ -43,7 +43,7 @@ from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, gro
                     reactions_from_balls, static_ball_position)
 from .defect import Spall, depth_profile
 from .errors import InvalidStateError, NotConvergedError, ResultCode
-from .hertz import hertz_contact, semi_axes, stiffness_curve
+from .hertz import chebyshev_eval, contact_ellipse, stiffness_curve
 from .kinematics import Operation
 
 __all__ = [
@@ -128,7 +128,6 @@ def initial_displacement(bearing, loads, curve):
     Ri = bearing.inner_groove_radius
     Fz = loads[2]
     Fmag = jnp.abs(Fz) + jnp.hypot(loads[0], loads[1]) + 2.0 * jnp.hypot(loads[3], loads[4]) / Ri
-    from .hertz import chebyshev_eval
     c0 = jnp.cos(a0)
     Ki, Ko = chebyshev_eval(curve.inner, c0), chebyshev_eval(curve.outer, c0)
     Kn = (Ki ** (-2.0 / 3.0) + Ko ** (-2.0 / 3.0)) ** (-1.5)
@@ -258,7 +257,6 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
     bearing = pb.bearing
     ball_cap = _BALL_CAP * bearing.ball_diameter / UM
     defect = pb.defect
-    static = pb.op.speed == 0.0
 
     def direction(piece):
         dq, dY, dYu, _ = _direction(pb, piece)
@@ -275,10 +273,6 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
         qz = c["qz"] + t * c["dq"]
         Y = lift_onto_outer(bearing, c["Y"] + t * c["dY"], d_c, pb.H_outer)
         Yu = lift_onto_outer(bearing, c["Yu"] + t * c["dYu"], d_cu, 0.0) if defect else None
-        # at rest the balls are eliminated exactly: the closed form (rigid-ring static model)
-        Y = jnp.where(static, _closed_form_balls(pb, qz)[0], Y)
-        if defect:
-            Yu = jnp.where(static, _closed_form_balls(pb, qz, True)[0], Yu)
         piece = _evaluate(pb, qz, Y, Yu)
         m = _merit(piece)
         dq, dY, dYu, sn = direction(piece)
@@ -490,6 +484,12 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
          if k in _JAC_KEYS})
     (qz, Y, Yu, jac), (codes, its) = lax.scan(stage, (qz, Y, Yu, jac0), jnp.asarray(fracs))
     code, total_it = codes[-1], jnp.sum(its)
+    # at rest the closed form is every ball's exact equilibrium for the converged q (rigid-ring
+    # static model): it places the balls that carry (next to) nothing, whose position the
+    # residual tolerance leaves open
+    at_rest = op.speed == 0.0
+    Y = jnp.where(at_rest, _closed_form_balls(pb, qz)[0], Y)
+    Yu = jnp.where(at_rest, _closed_form_balls(pb, qz, True)[0], Yu)
 
     # implicit differentiation: one Newton correction at the solution with the Jacobian of the
     # last accepted iterate frozen; the derivative flows through the residuals only (IFT)
@@ -510,11 +510,8 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
             Yu * UM, A1, A2)
     st = jax.vmap(lambda xx, a1, a2, ho, hi, w: ball_state(bearing, op, xx, a1, a2, curve, ho, hi, w),
                   in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(x, A1, A2, Ho, Hi, ws)
-    hi_ = hertz_contact(bearing, st.alpha_inner, True, hertz_method)
-    ho_ = hertz_contact(bearing, st.alpha_outer, False, hertz_method)
-    Ep = bearing.effective_modulus
-    a_i, b_i, p_i = semi_axes(hi_, st.Q_inner, Ep)
-    a_o, b_o, p_o = semi_axes(ho_, st.Q_outer, Ep)
+    a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
+    a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
     valid = _validity(bearing, op, st, psi, q, F, Ho, rtol)
     code = jnp.where(code == 0, valid, code).astype(jnp.int32)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,

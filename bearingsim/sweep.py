@@ -1,12 +1,15 @@
 """Cage-angle sweeps (MODEL.md section 6): the quasi-static contact state as the ball set
 rotates past the defect.
 
-All angles are solved at once (``vmap`` of :func:`bearingsim.jones.solve_state`), each warm
-started from the converged state at the first angle: the same ring displacement, and every
-ball's centre interpolated (periodically, in azimuth) from the first angle's undropped balls.
-That is one fixed-shape batched Newton: a handful of large kernels instead of one small solve
-per angle.  Angles that fail from the warm start are solved again from the rigid-ring static
-solution in 8 speed steps (a second compiled program, only when needed).  For the rectangular
+The angles fall into runs over which the same balls are over the defect.  One angle of each run
+(its middle) is solved cold (the compiled single solve); then all angles are solved at once
+(``vmap`` of :func:`bearingsim.jones.solve_state`), each warm started from its run's solution
+(ring displacement and every ball's centre, ball by ball).  That is one fixed-shape batched
+Newton -- a handful of large kernels instead of one small solve per angle -- whose starts are
+all a fraction of a ball pitch from a converged state with the same balls in the defect, so
+the lockstep loop needs few iterations.  Angles that fail from the warm start are solved again
+from the rigid-ring static solution in 8 speed steps (a second compiled program, only when
+needed).  For the rectangular
 profile, whose state jumps when a ball enters or leaves the spall, the angles just before and
 just after every edge are inserted into the grid.
 """
@@ -18,9 +21,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .hertz import stiffness_curve
+from .defect import depth_profile
 from .jones import JonesSolution, raise_for, solve, solve_state
 
-__all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "sweep", "sweep_chunked"]
+__all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "defect_occupancy", "representatives",
+           "sweep", "sweep_chunked"]
 
 EDGE_EPS = 1e-7   # rad: the inserted angles sit this far either side of a spall edge
 
@@ -58,29 +63,35 @@ def sweep_angles(bearing, spall, start, stop, steps, resolve_edges=True):
     return grid
 
 
-def _interpolated_balls(bearing, first: JonesSolution, angle):
-    """Ball centres (Z, 2) at cage angle ``angle`` interpolated periodically in azimuth from the
-    first angle's undropped balls (smooth in psi)."""
-    Z = bearing.n_balls
-    pitch = 2 * jnp.pi / Z
-    u = jnp.mod(bearing.ball_azimuths(angle) - first.cage_angle, 2 * jnp.pi) / pitch
-    k = jnp.floor(u).astype(jnp.int32)
-    f = (u - k)[:, None]
-    X = first.undropped_position
-    return (1.0 - f) * X[k % Z] + f * X[(k + 1) % Z]
+def defect_occupancy(bearing, spall, angles):
+    """(N, Z) bool: which balls are over the defect at each cage angle (numpy)."""
+    angles = np.asarray(angles, dtype=float)
+    if spall is None:
+        return np.zeros((angles.size, bearing.n_balls), bool)
+    psi = jax.vmap(bearing.ball_azimuths)(jnp.asarray(angles))
+    return np.asarray(jax.vmap(lambda p: depth_profile(bearing, spall, p))(psi)) > 0.0
 
 
-def _sweep_warm(bearing, op, loads, spall, first, angles, maxit, rtol, atol, hertz_method):
+def representatives(occupancy):
+    """Index of the middle angle of every run of equal defect occupancy, and each angle's run."""
+    change = np.any(occupancy[1:] != occupancy[:-1], axis=1)
+    run = np.concatenate([[0], np.cumsum(change)])
+    reps = np.array([int(np.flatnonzero(run == r)[len(np.flatnonzero(run == r)) // 2])
+                     for r in range(run[-1] + 1)])
+    return reps, run
+
+
+def _sweep_warm(bearing, op, loads, spall, angles, q0, x0, xu0, maxit, rtol, atol, hertz_method):
     curve = stiffness_curve(bearing, hertz_method)
+    at_rest = op.speed <= 0.0            # at rest the closed form is the exact ball start
 
-    def one(angle):
-        x0 = _interpolated_balls(bearing, first, angle)
-        x0 = jnp.where(op.speed > 0.0, x0, jnp.nan)      # at rest the closed form is exact
-        return solve_state(bearing, op, loads, cage_angle=angle, spall=spall,
-                           q0=first.displacement, x0=x0, xu0=x0, maxit=maxit, rtol=rtol,
-                           atol=atol, hertz_method=hertz_method, curve=curve)
+    def one(angle, q, x, xu):
+        x, xu = (jnp.where(at_rest, jnp.nan, v) for v in (x, xu))
+        return solve_state(bearing, op, loads, cage_angle=angle, spall=spall, q0=q, x0=x, xu0=xu,
+                           maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method,
+                           curve=curve)
 
-    return jax.vmap(one)(angles)
+    return jax.vmap(one)(angles, q0, x0, xu0)
 
 
 _sweep_warm_jit = eqx.filter_jit(_sweep_warm)
@@ -101,13 +112,12 @@ def _tolerances(maxit, rtol, atol):
 
 
 def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, steps=181,
-          resolve_edges=True, first=None, maxit=60, rtol=1e-11, atol=1e-9,
+          resolve_edges=True, maxit=60, rtol=1e-11, atol=1e-9,
           hertz_method="exact", throw=False) -> JonesSolution:
     """Quasi-static states over cage angles: a JonesSolution whose arrays have a leading (N,) axis.
 
     Give ``angles`` (rad) or ``start``/``stop`` (rad, default one ball pitch)/``steps``.
-    ``first``: a converged solution to warm start from (default: a cold solve at the first
-    angle).  ``throw=False`` (default): ``result`` is per angle; ``throw=True`` raises for the
+    ``throw=False`` (default): ``result`` is per angle; ``throw=True`` raises for the
     first angle that failed (naming how many did).
     """
     if angles is None:
@@ -116,49 +126,40 @@ def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, 
     angles = jnp.asarray(angles, dtype=jnp.float64)
     loads = jnp.asarray(loads, jnp.float64)
     tol = _tolerances(maxit, rtol, atol)
-    if first is None:
-        first = solve(bearing, op, loads, cage_angle=angles[0], spall=spall, maxit=maxit,
-                      rtol=rtol, atol=atol, hertz_method=hertz_method, throw=False)
-    if int(first.result) == 0:
-        sol = _sweep_warm_jit(bearing, op, loads, spall, first, angles, *tol, hertz_method)
-        bad = np.flatnonzero(np.asarray(sol.result) != 0)
-    else:
-        sol, bad = None, np.arange(angles.shape[0])
+    kw = dict(spall=spall, maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, throw=False)
+    # one cold solve per run of equal defect occupancy (the same compiled single solve), then
+    # every angle warm started from its run's solution, all at once
+    reps, run = representatives(defect_occupancy(bearing, spall, angles))
+    rep_sols = [solve(bearing, op, loads, cage_angle=angles[int(r)], **kw) for r in reps]
+    ok_rep = np.array([int(r.result) == 0 for r in rep_sols])
+    start = jax.tree_util.tree_map(lambda *a: jnp.stack(a)[jnp.asarray(run)], *[
+        (r.displacement, r.ball_position, r.undropped_position) for r in rep_sols])
+    sol = _sweep_warm_jit(bearing, op, loads, spall, angles, *start, *tol, hertz_method)
+    bad = np.flatnonzero((np.asarray(sol.result) != 0) | ~ok_rep[run])
     if bad.size:
         # pad to a power of two: one compiled shape for any number of failures
         n = 1 << int(np.ceil(np.log2(bad.size)))
         idx = np.concatenate([bad, np.full(n - bad.size, bad[0])])
         redo = _sweep_cold_jit(bearing, op, loads, spall, angles[idx], *tol, hertz_method)
         redo = jax.tree_util.tree_map(lambda r: r[:bad.size], redo)
-        if sol is None:
-            sol = redo
-        else:
-            ok = np.asarray(redo.result) == 0
-            take = jnp.asarray(bad[ok])
-            sol = jax.tree_util.tree_map(lambda a, r: a.at[take].set(r[jnp.asarray(ok)]), sol, redo)
+        ok = (np.asarray(redo.result) == 0) | (np.asarray(sol.result)[bad] != 0)
+        take = jnp.asarray(bad[ok])
+        sol = jax.tree_util.tree_map(lambda a, r: a.at[take].set(r[jnp.asarray(ok)]), sol, redo)
     if throw:
         raise_for(sol, "cage-angle sweep")
     return sol
 
 
 def sweep_chunked(bearing, op, loads, spall, angles, chunk=256, progress=None, **kw):
-    """The same sweep in chunks of ``chunk`` angles (all warm started from one cold solve at the
-    first angle), calling ``progress(n)`` after each chunk: for progress bars on long sweeps.
-    One compilation for every chunk (the last one is padded)."""
+    """The same sweep in chunks of ``chunk`` angles, calling ``progress(n)`` after each chunk:
+    for progress bars on long sweeps.  One compilation for every chunk (the last is padded)."""
     angles = np.asarray(angles, dtype=float)
-    if len(angles) <= chunk:
-        sol = sweep(bearing, op, loads, spall, angles=angles, **kw)
-        if progress is not None:
-            progress(len(angles))
-        return sol
-    first = solve(bearing, op, jnp.asarray(loads, jnp.float64), cage_angle=angles[0], spall=spall,
-                  throw=False, **{k: v for k, v in kw.items() if k in ("maxit", "rtol", "atol",
-                                                                        "hertz_method")})
     parts = []
     for k in range(0, len(angles), chunk):
         part = angles[k:k + chunk]
-        pad = np.concatenate([part, np.full(chunk - len(part), part[-1])])
-        sol = sweep(bearing, op, loads, spall, angles=pad, first=first, **kw)
+        pad = part if len(angles) <= chunk else np.concatenate(
+            [part, np.full(chunk - len(part), part[-1])])
+        sol = sweep(bearing, op, loads, spall, angles=pad, **kw)
         parts.append(jax.tree_util.tree_map(lambda a: a[:len(part)], sol))
         if progress is not None:
             progress(len(part))

@@ -60,3 +60,15 @@ def test_K_depends_on_contact_angle(b218):
     K20 = float(bs.hertz_contact(b218, np.deg2rad(20.0), True).K)
     K60 = float(bs.hertz_contact(b218, np.deg2rad(60.0), True).K)
     assert K60 / K20 > 1.001
+
+
+def test_contact_ellipse_series_reproduces_exact_semi_axes(b218):
+    """a, b and p_max from the Chebyshev series equal hertz.semi_axes of the exact solution."""
+    curve = hertz.stiffness_curve(b218)
+    a = jnp.linspace(-1.5, 1.5, 301)
+    Q = jnp.linspace(10.0, 5000.0, 301)
+    for inner in (True, False):
+        ea, eb, ep = hertz.semi_axes(bs.hertz_contact(b218, a, inner), Q, b218.effective_modulus)
+        sa, sb, sp_ = hertz.contact_ellipse(curve, jnp.cos(a), Q, inner)
+        for x, y in ((sa, ea), (sb, eb), (sp_, ep)):
+            assert float(jnp.max(jnp.abs(x / y - 1))) < 1e-12
