@@ -631,12 +631,16 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
                            hertz_method)
     bad = np.flatnonzero(np.asarray(sol.result) != 0)
     if bad.size and speed_steps < 8:
+        # pad to a power of two: one compiled retry shape for any number of failures
+        n_pad = 1 << int(np.ceil(np.log2(bad.size)))
+        pidx = jnp.asarray(np.concatenate([bad, np.full(n_pad - bad.size, bad[0])]))
         idx = jnp.asarray(bad)
-        sub = lambda a: a[idx]
+        sub = lambda a: a[pidx]
         op_r = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
                            (sub(op_b.speed), sub(op_b.centrifugal), sub(op_b.gyroscopic)))
-        retry = _solve_batch_jit(bearing, op_r, loads[idx], cage[idx], spall, 8, maxit, rtol, atol,
+        retry = _solve_batch_jit(bearing, op_r, loads[pidx], cage[pidx], spall, 8, maxit, rtol, atol,
                                  hertz_method)
+        retry = jax.tree_util.tree_map(lambda r: r[:bad.size], retry)
         take = jnp.asarray(np.asarray(retry.result) == 0)
 
         def merge(a, r):

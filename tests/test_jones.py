@@ -164,9 +164,10 @@ def test_gradient_through_the_solve_is_the_implicit_derivative(b218):
 # ---------------------------------------------------------------------------- batch, codes
 def test_batch_equals_single_solves(b218):
     op = bs.Operation.from_rpm(8000.0)
-    loads = np.array([[1000.0, 0, 12000.0, 0, 40.0], [0, -2000.0, 6000.0, -30.0, 0], [0, 0, 22250.0, 0, 0]])
+    loads = np.array([[1000.0, 0, 12000.0, 0, 40.0], [0, -2000.0, 6000.0, -30.0, 0], [0, 0, 22250.0, 0, 0],
+                      [0, 0, 500.0, 0, 0], [3000.0, 1000.0, 9000.0, 20.0, -20.0]])   # 5: one compiled shape
     batch = bs.solve_batch(b218, op, loads)
-    for k in range(3):
+    for k in range(5):
         s = bs.solve(b218, op, loads[k])
         np.testing.assert_allclose(batch.Q_inner[k], s.Q_inner, rtol=1e-10, atol=1e-8)
         np.testing.assert_allclose(batch.displacement[k], s.displacement, rtol=1e-10, atol=1e-16)
@@ -183,10 +184,11 @@ def test_non_convergence_raises_with_residual_and_hint(b218):
 
 def test_batch_throw_names_the_failed_items(b218):
     op = bs.Operation.from_rpm(0.0)
-    loads = np.array([[0, 0, 10000.0, 0, 0], [0, 0, 1e9, 0, 0]])
+    loads = np.array([[0, 0, 10000.0, 0, 0], [0, 0, 1e9, 0, 0], [0, 0, 2e4, 0, 0], [0, 0, 3e4, 0, 0],
+                      [0, 0, 4e4, 0, 0]])
     sol = bs.solve_batch(b218, op, loads)
-    assert list(np.asarray(sol.result)) == [0, bs.RESULTS.beyond_bounds]
-    with pytest.raises(bs.InvalidStateError, match=r"item 1; 1 of 2 failed.*1 % of the ball diameter"):
+    assert list(np.asarray(sol.result)) == [0, bs.RESULTS.beyond_bounds, 0, 0, 0]
+    with pytest.raises(bs.InvalidStateError, match=r"item 1; 1 of 5 failed.*1 % of the ball diameter"):
         bs.solve_batch(b218, op, loads, throw=True)
 
 
