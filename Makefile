@@ -4,8 +4,12 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results/demo
-# compiled JAX programs are reused across processes (tests, CLI runs, notebooks)
+# compiled JAX programs are reused across processes (tests, CLI runs, notebooks, test workers)
 export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.jax_cache
+export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0.5
+# one pytest worker per core (2 on CI); each file stays on one worker, so its compiled programs
+# are compiled once
+JOBS ?= 2
 
 .PHONY: demo test venv clean bench
 
@@ -21,11 +25,14 @@ demo: $(STAMP)
 	$(VENV)/bin/bearingsim demo --out $(OUT)
 
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider tests $(wildcard notebooks/*.ipynb) --nbmake --durations=15
+	$(PY) -m pytest -q -p no:cacheprovider -n $(JOBS) --dist loadfile tests $(wildcard notebooks/*.ipynb) --nbmake --durations=20
 
 bench: $(STAMP)
+	$(PY) benchmarks/bench_compile.py
 	$(PY) benchmarks/bench_static.py
 	$(PY) benchmarks/bench_sweep.py
+	$(PY) benchmarks/bench_validity.py
+	$(PY) benchmarks/bench_dynamics.py
 
 clean:
 	rm -rf $(VENV) results build *.egg-info
