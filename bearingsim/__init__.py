@@ -24,7 +24,7 @@ from .kinematics import (  # noqa: E402
     defect_frequencies,
     DefectFrequencies,
 )
-from .defect import Spall, NO_SPALL, depth_profile  # noqa: E402
+from .defect import Spall, NO_SPALL, depth_profile, contact_depths  # noqa: E402
 from .errors import (  # noqa: E402
     BearingsimError,
     InputError,
@@ -64,6 +64,7 @@ __all__ = [
     "Spall",
     "NO_SPALL",
     "depth_profile",
+    "contact_depths",
     "BearingsimError",
     "InputError",
     "NotConvergedError",

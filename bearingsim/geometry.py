@@ -84,6 +84,12 @@ class Bearing(eqx.Module):
         return 0.5 * (self.pitch_diameter + self.ball_diameter * jnp.cos(self.free_contact_angle))
 
     @property
+    def inner_raceway_radius(self):
+        """R_ir = (d_m - D cos alpha_0)/2: radius along which an inner-raceway spall's arc length is
+        measured (m; MODEL.md section 9)."""
+        return 0.5 * (self.pitch_diameter - self.ball_diameter * jnp.cos(self.free_contact_angle))
+
+    @property
     def inner_raceway_diameter(self):
         """Inner raceway (groove bottom) diameter d_i = d_m - D (m)."""
         return self.pitch_diameter - self.ball_diameter

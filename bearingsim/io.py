@@ -62,7 +62,7 @@ RING_DOFS = (("x", "um"), ("y", "um"), ("axial", "um"), ("tilt_x", "mrad"), ("ti
 STATIC_BALL_FIELDS = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer", "deg"), ("Q_inner", "N"),
                       ("Q_outer", "N"), ("delta_inner", "um"), ("delta_outer", "um"), ("centrifugal", "N"),
                       ("gyroscopic_moment", "Nm"), ("p_max_inner", "MPa"), ("p_max_outer", "MPa"),
-                      ("orbital_speed", "rpm"), ("spall_depth", "um"))
+                      ("orbital_speed", "rpm"), ("spall_depth", "um"), ("spall_depth_inner", "um"))
 
 
 def static_to_dict(sol, bearing=None) -> dict:
@@ -157,6 +157,7 @@ _STATE_FIELDS = {
     "gyroscopic_moment": ("gyroscopic_moment", "N m"),
     "orbital_speed": ("orbital_speed", "rad/s"),
     "spall_depth": ("spall_depth", "m"),
+    "spall_depth_inner": ("spall_depth_inner", "m"),
     "p_max_inner": ("p_max_inner", "Pa"),
     "p_max_outer": ("p_max_outer", "Pa"),
     "ring_displacement": ("displacement", "x, y, axial in m; tilt_x, tilt_y in rad"),

@@ -41,7 +41,7 @@ from jax import lax
 from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, groove_centre_offsets,
                     inverse2, lift_onto_outer, offset_jacobian, reaction_matrix,
                     reactions_from_balls, static_ball_position)
-from .defect import Spall, depth_profile
+from .defect import Spall, contact_depths
 from .errors import InvalidStateError, NotConvergedError, ResultCode
 from .hertz import chebyshev_eval, contact_ellipse, stiffness_curve
 from .kinematics import Operation
@@ -139,10 +139,9 @@ def initial_displacement(bearing, loads, curve):
 
 
 def _defect_depths(bearing, spall, psi):
-    """(H_outer, H_inner) under each ball, or (None, None) when healthy."""
-    if spall is None:
-        return None, None
-    return depth_profile(bearing, spall, psi), None
+    """(H_outer, H_inner) under each ball, or (None, None) when healthy: ``spall`` is None, a
+    :class:`Spall` (outer, inner or ball, MODEL.md 5 and 9) or a tuple of them."""
+    return contact_depths(bearing, spall, psi)
 
 
 # ----------------------------------------------------------------------------- Newton system
@@ -346,7 +345,7 @@ class JonesSolution(eqx.Module):
     gyroscopic_moment: jnp.ndarray
     orbital_speed: jnp.ndarray
     beta: jnp.ndarray
-    spall_depth: jnp.ndarray
+    spall_depth: jnp.ndarray        # H_outer: defect depth at each ball's outer contact (m)
     ball_G: jnp.ndarray
     ball_H: jnp.ndarray
     ball_moment: jnp.ndarray
@@ -361,6 +360,7 @@ class JonesSolution(eqx.Module):
     stiffness: jnp.ndarray
     ball_position: jnp.ndarray      # (Z, 2) ball centres (X1, X2) from the outer groove centre (m)
     undropped_position: jnp.ndarray  # (Z, 2) the same without the defect (warm starts)
+    spall_depth_inner: jnp.ndarray  # H_inner: defect depth at each ball's inner contact (m)
 
     @property
     def converged(self):
@@ -388,7 +388,7 @@ class JonesSolution(eqx.Module):
         return [RESULTS.of(c).message for c in codes]
 
 
-def _validity(bearing, op, st: BallState, psi, q, F, H_outer, rtol):
+def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
     """Result code of a converged state, re-checked from its per-ball output (MODEL.md 3-4)."""
     D = bearing.ball_diameter
     lam_i, lam_o = op.factors
@@ -414,7 +414,7 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_outer, rtol):
     d_lim = DEFORMATION_LIMIT * D
     deform = jnp.maximum(jnp.where(st.Q_inner > 0.0, st.delta_inner, 0.0),
                          jnp.where(st.Q_outer > 0.0, st.delta_outer, 0.0))
-    room = bearing.A + jnp.max(H_outer) + 2.0 * d_lim
+    room = bearing.A + jnp.max(H_total) + 2.0 * d_lim
     ring = jnp.maximum(jnp.hypot(q[0], q[1]), jnp.abs(q[2]))
     ring = jnp.maximum(ring, 0.5 * bearing.pitch_diameter * jnp.hypot(q[3], q[4]))
     bounds = (jnp.max(deform) > d_lim) | (ring > room)
@@ -427,7 +427,7 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_outer, rtol):
                 ball_bad | ring_bad, RESULTS.equilibrium, RESULTS.successful)))).astype(jnp.int32)
 
 
-def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None,
+def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,
                 q0=None, x0=None, xu0=None, speed_steps: int = 1, maxit=60, rtol=1e-11, atol=1e-9,
                 hertz_method: str = "exact", curve=None) -> JonesSolution:
     """The quasi-static state as a pure JAX function (jit/vmap/grad; never raises).
@@ -512,16 +512,16 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
                   in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(x, A1, A2, Ho, Hi, ws)
     a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
-    valid = _validity(bearing, op, st, psi, q, F, Ho, rtol)
+    valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
     code = jnp.where(code == 0, valid, code).astype(jnp.int32)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
                          st.ball_G, st.ball_H, st.ball_moment, st.K_inner, st.K_outer, p_i, p_o,
-                         a_i, b_i, a_o, b_o, K, x, Yu * UM)
+                         a_i, b_i, a_o, b_o, K, x, Yu * UM, Hi)
 
 
-def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | None = None, hertz_method="exact",
+def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | tuple | None = None, hertz_method="exact",
                    curve=None):
     """Load-displacement map: the loads [Fx, Fy, Fz, Mx, My] (N, N m) the bearing carries at
     inner-ring displacement q = [dx, dy, dz, theta_x, theta_y] (m, rad), balls in equilibrium
@@ -569,7 +569,7 @@ def _warn_overload(sol):
                       "result is an elastic idealisation", OverloadWarning, stacklevel=3)
 
 
-def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None, q0=None,
+def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None, q0=None,
           speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
           hertz_method: str = "exact", throw: bool = True) -> JonesSolution:
     """Solve the Jones model for one load case.
@@ -579,7 +579,8 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None 
     to speed in ``speed_steps`` steps; if that fails it retries once with 8 speed steps (off
     the hot path).  ``throw=True`` raises :class:`NotConvergedError` or
     :class:`InvalidStateError` with the reason and a hint; pressures above 4.2 GPa warn
-    (:class:`OverloadWarning`).
+    (:class:`OverloadWarning`).  ``spall``: None (healthy), a :class:`Spall` on the outer or
+    inner raceway or a pit on one ball (MODEL.md 5 and 9), or a tuple of them (several defects).
     """
     loads = jnp.asarray(loads, dtype=jnp.float64)
     cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
@@ -611,7 +612,7 @@ def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol
 _solve_batch_jit = eqx.filter_jit(_solve_batch)
 
 
-def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | None = None,
+def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,
                 speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
                 hertz_method: str = "exact", throw: bool = False) -> JonesSolution:
     """vmapped solve over N load cases ``loads`` (N, 5); ``op.speed`` and ``cage_angle`` may be

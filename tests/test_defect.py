@@ -128,3 +128,190 @@ def test_seed_findings_jump_grows_with_extent(b218):
         drop.append(float(h.alpha_outer[0] - s.alpha_outer[0]))
         extra.append(float(s.Q_outer[1] - h.Q_outer[1]))
     assert np.all(np.diff(drop) > 0) and np.all(np.diff(extra) > 0)
+
+
+# ------------------------------------------------------------------------------ inner raceway, ball (MODEL.md 9)
+from bearingsim.balls import ball_state, balls_at  # noqa: E402
+from bearingsim.defect import ball_pit_depths, contact_depths  # noqa: E402
+from bearingsim.hertz import stiffness_curve  # noqa: E402
+from conftest import inverted_contacts  # noqa: E402
+
+INNER = bs.Spall(0.0, 8 * DEG, 0.3e-3, "rectangular", "inner")     # under ball 0, the most loaded
+
+
+def _sag(D, x):
+    return D / 2 - np.sqrt((D / 2) ** 2 - x ** 2)
+
+
+def test_inner_raceway_radius_and_profile(b218):
+    D, dm, a0 = 22.225e-3, 125.26e-3, np.deg2rad(40.0)
+    R_ir = (dm - D * np.cos(a0)) / 2                                   # 54.1173 mm
+    assert float(b218.inner_raceway_radius) == pytest.approx(R_ir, rel=1e-15)
+    assert float(b218.inner_raceway_radius) < float(b218.inner_groove_radius) < float(b218.outer_raceway_radius)
+    sp = bs.Spall.from_length(b218, 10 * DEG, 1.5e-3, 1e-3, "rectangular", "inner")
+    assert float(sp.extent) == pytest.approx(1.5e-3 / R_ir, rel=1e-15)
+    assert float(sp.length(b218)) == pytest.approx(1.5e-3, rel=1e-15)
+    half = 0.5 * float(sp.extent)
+    psi = jnp.array([10 * DEG, 10 * DEG - 0.99 * half, 10 * DEG + 0.99 * half, 10 * DEG + 1.01 * half])
+    H = np.asarray(depth_profile(b218, sp, psi))
+    np.testing.assert_allclose(H[:3], _sag(D, 0.75e-3), rtol=1e-12)    # sag-limited: 25.4 um < 1 mm
+    assert H[3] == 0.0
+    Ho, Hi = contact_depths(b218, sp, b218.ball_azimuths(10 * DEG))
+    assert np.all(np.asarray(Ho) == 0.0) and float(Hi[0]) == pytest.approx(H[0], rel=1e-15)
+    assert np.all(np.asarray(Hi[1:]) == 0.0)
+
+
+def test_ball_pit_profile(b218):
+    D = float(b218.ball_diameter)
+    pit = bs.Spall.from_length(b218, 0.0, 0.1778e-3, 0.2794e-3, "rectangular", "ball", ball=3)
+    assert float(pit.extent) == pytest.approx(2 * 0.1778e-3 / D, rel=1e-15)
+    Hb = _sag(D, 0.5 * 0.1778e-3)                                      # 0.356 um: sag-limited
+    ho, hi = ball_pit_depths(b218, pit)
+    assert float(ho) == pytest.approx(Hb, rel=1e-10) and float(hi) == 0.0
+    turned = bs.Spall(np.pi, pit.extent, pit.depth, "rectangular", "ball", ball=3)   # half a turn
+    ho, hi = ball_pit_depths(b218, turned)
+    assert float(ho) == 0.0 and float(hi) == pytest.approx(Hb, rel=1e-10)
+    Ho, Hi = contact_depths(b218, pit, b218.ball_azimuths(0.3))
+    assert float(Ho[3]) == pytest.approx(Hb, rel=1e-10)
+    assert np.count_nonzero(np.asarray(Ho)) == 1 and np.count_nonzero(np.asarray(Hi)) == 0
+    side = bs.Spall(0.5 * np.pi, pit.extent, pit.depth, "rectangular", "ball", ball=3)
+    assert not np.any(np.asarray(contact_depths(b218, side, b218.ball_azimuths(0.0))))
+    with pytest.raises(ValueError, match="16 balls"):
+        contact_depths(b218, bs.Spall(0.0, 0.1, 1e-4, "rectangular", "ball", ball=16), b218.ball_azimuths())
+    with pytest.raises(ValueError, match="location"):
+        bs.Spall(0.0, 0.1, 1e-4, "rectangular", "cage")
+
+
+def test_several_defects_and_gradients(b218):
+    psi = b218.ball_azimuths(0.0)
+    outer = bs.Spall(0.0, 4 * DEG, 0.1e-3, "ball-path")
+    inner = bs.Spall(45 * DEG, 4 * DEG, 0.1e-3, "ball-path", "inner")
+    Ho, Hi = contact_depths(b218, (outer, inner), psi)
+    np.testing.assert_array_equal(Ho, contact_depths(b218, outer, psi)[0])
+    np.testing.assert_array_equal(Hi, contact_depths(b218, inner, psi)[1])
+    assert float(Ho[0]) > 0 and float(Hi[2]) > 0                       # ball 2 sits at 45 deg
+
+    def total(depth, extent, loc):
+        sp = bs.Spall(0.5 * DEG, extent, depth, "ball-path", loc, 0)
+        ho, hi = contact_depths(b218, sp, psi)
+        return jnp.sum(ho + hi)
+    for loc in ("inner", "ball"):
+        g = jax.grad(total, argnums=(0, 1))(0.3e-3, 4 * DEG, loc)
+        assert all(np.isfinite(float(x)) for x in g) and float(g[1]) != 0.0
+        g0 = jax.grad(total, argnums=(0, 1))(0.0, 4 * DEG, loc)          # at depth 0: finite
+        assert all(np.isfinite(float(x)) for x in g0)
+
+
+def _same_state(a, b, rtol=1e-12):
+    for f in ("Q_inner", "Q_outer", "alpha_inner", "alpha_outer", "displacement"):
+        np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=rtol, atol=1e-15 if f == "displacement" else 1e-9)
+
+
+def test_inner_and_ball_depth_zero_is_the_healthy_bearing(b218):
+    """Depth 0 for each location: the healthy state to round-off (rtol 1e-12: the same Newton
+    path, only the defect bookkeeping -- undropped balls -- differs)."""
+    op = bs.Operation.from_rpm(10000.0)
+    healthy = bs.solve(b218, op, LOADS, cage_angle=0.01)
+    for sp in (bs.Spall(0.0, 8 * DEG, 0.0, "rectangular", "inner"),
+               bs.Spall(0.0, 8 * DEG, 0.0, "rectangular", "ball", 0)):
+        _same_state(bs.solve(b218, op, LOADS, cage_angle=0.01, spall=sp), healthy)
+
+
+@pytest.mark.parametrize("rpm", [0.0, 10000.0])
+def test_inner_spall_under_the_most_loaded_ball(b218, rpm):
+    """An inner spall (8 deg, 0.3 mm: the ball drops by the full 0.3 mm) under ball 0, the most
+    loaded: the ball loses its inner contact, its neighbours take over, and the global and ball
+    equilibria re-derived in numpy hold to 1e-9 (the solver's own tolerance is 1e-11 relative)."""
+    op = bs.Operation.from_rpm(rpm)
+    h = bs.solve(b218, op, LOADS)
+    s = bs.solve(b218, op, LOADS, spall=INNER)
+    assert int(s.result) == 0 and inverted_contacts(s) == 0
+    assert float(s.spall_depth_inner[0]) == pytest.approx(0.3e-3) and not np.any(np.asarray(s.spall_depth))
+    assert float(s.Q_inner[0]) == 0.0
+    assert float(s.Q_inner[1]) > 1.1 * float(h.Q_inner[1]) and float(s.Q_inner[15]) > 1.1 * float(h.Q_inner[15])
+    assert equilibrium_error(b218, s, op) <= 1e-9
+    assert ball_equilibrium_error(b218, s, op) <= 1e-9
+    if rpm == 0.0:
+        assert float(s.Q_outer[0]) == 0.0
+    else:
+        # carried by the cage at its undropped orbital speed: F_c alone holds it on the outer raceway
+        assert float(s.Q_outer[0]) == pytest.approx(float(s.centrifugal[0]), rel=1e-6)
+        # ... at the orbital speed of its undropped centre (same q, no defect), MODEL.md 5
+        from bearingsim.balls import groove_centre_offsets
+        A1, A2 = groove_centre_offsets(b218, s.displacement, s.azimuth)
+        wu = ball_state(b218, op, s.undropped_position[0], A1[0], A2[0], stiffness_curve(b218)).orbital_speed
+        assert float(s.orbital_speed[0]) == pytest.approx(float(wu), rel=1e-12)
+        assert float(s.orbital_speed[0]) == pytest.approx(float(h.orbital_speed[0]), rel=1e-2)
+
+
+def test_outer_and_inner_spall_together(b218):
+    op = bs.Operation.from_rpm(10000.0)
+    both = (bs.Spall(0.0, 8 * DEG, 0.3e-3, "rectangular"), bs.Spall(45 * DEG, 8 * DEG, 0.3e-3, "rectangular", "inner"))
+    s = bs.solve(b218, op, LOADS, spall=both)
+    assert int(s.result) == 0 and inverted_contacts(s) == 0
+    assert float(s.spall_depth[0]) > 0 and float(s.spall_depth_inner[2]) > 0
+    h = bs.solve(b218, op, LOADS)
+    # both spalled balls (0: outer, 2: inner) all but lose their inner contact; ball 1 between
+    # them and ball 15 take over
+    assert float(s.Q_inner[0]) < 0.05 * float(h.Q_inner[0]) and float(s.Q_inner[2]) < 0.05 * float(h.Q_inner[2])
+    assert float(s.Q_inner[1]) > 1.1 * float(h.Q_inner[1]) and float(s.Q_inner[15]) > 1.1 * float(h.Q_inner[15])
+    assert equilibrium_error(b218, s, op) <= 1e-9 and ball_equilibrium_error(b218, s, op) <= 1e-9
+
+
+def test_ball_pit_at_rest_closed_form(b218):
+    """At rest and fixed ring displacement q, a pit of sag-limited depth H_b in the outer contact
+    of ball 3 reduces that ball's outer deformation by exactly H_b for the same ball centre, and
+    its total deformation delta_i + delta_o = L - A - H_b in the closed form; the other balls are
+    untouched.  Half a ball turn later the same H_b enters delta_i instead."""
+    op = bs.Operation.from_rpm(0.0)
+    curve = stiffness_curve(b218)
+    q = bs.solve(b218, op, LOADS).displacement
+    psi = b218.ball_azimuths(0.0)
+    pit = bs.Spall.from_length(b218, 0.0, 0.5e-3, 0.3e-3, "rectangular", "ball", ball=3)
+    Hb = float(ball_pit_depths(b218, pit)[0])
+    assert Hb == pytest.approx(_sag(float(b218.ball_diameter), 0.25e-3), rel=1e-10)
+    h = balls_at(b218, op, q, psi, curve)
+    for spin, key in ((0.0, "delta_outer"), (np.pi, "delta_inner")):
+        sp = bs.Spall(spin, pit.extent, pit.depth, "rectangular", "ball", 3)
+        Ho, Hi = contact_depths(b218, sp, psi)
+        s = balls_at(b218, op, q, psi, curve, Ho, Hi)
+        tot_h = np.asarray(h.delta_inner + h.delta_outer)
+        tot_s = np.asarray(s.delta_inner + s.delta_outer)
+        assert tot_s[3] == pytest.approx(tot_h[3] - Hb, abs=1e-15)      # round-off of ~1e-4 m lengths
+        np.testing.assert_array_equal(np.delete(tot_s, 3), np.delete(tot_h, 3))
+        # same ball centre: the pit takes exactly H_b off the contact it is in
+        from bearingsim.balls import groove_centre_offsets
+        A1, A2 = groove_centre_offsets(b218, q, psi)
+        x = jnp.stack([h.X1[3], h.X2[3]])
+        st = ball_state(b218, op, x, A1[3], A2[3], curve, Ho[3], Hi[3])
+        assert float(getattr(st, key)) == pytest.approx(float(getattr(h, key)[3]) - Hb, abs=1e-15)
+
+
+def test_ball_pit_equals_a_raceway_spall_of_the_same_depth(b218):
+    """The solve sees only the per-ball depths: a pit in ball 0's outer (inner) contact is an
+    outer (inner) raceway spall giving ball 0 the same depth -- the states agree to round-off."""
+    op = bs.Operation.from_rpm(10000.0)
+    pit_o = bs.Spall(0.0, 8 * DEG, 0.3e-3, "rectangular", "ball", 0)
+    Hb = float(ball_pit_depths(b218, pit_o)[0])
+    raceway = bs.Spall(0.0, 8 * DEG, Hb, "rectangular")
+    assert float(contact_depths(b218, raceway, b218.ball_azimuths(0.0))[0][0]) == Hb
+    _same_state(bs.solve(b218, op, LOADS, spall=pit_o), bs.solve(b218, op, LOADS, spall=raceway))
+    pit_i = bs.Spall(np.pi, 8 * DEG, 0.3e-3, "rectangular", "ball", 0)
+    inner = bs.Spall(0.0, 8 * DEG, Hb, "rectangular", "inner")
+    _same_state(bs.solve(b218, op, LOADS, spall=pit_i), bs.solve(b218, op, LOADS, spall=inner))
+
+
+def test_sweep_of_the_inner_spall_azimuth(b218):
+    """The inner spall turned past the loaded balls at a fixed cage angle: every state converged
+    and valid, equal to the single solve at the same azimuth, and ball 0 drops exactly while the
+    spall is under it."""
+    from bearingsim.sweep import sweep_defect_angle
+    op = bs.Operation.from_rpm(0.0)
+    centres = np.array([-8.0, -5.0, -2.0, 0.0, 3.0, 11.25, 20.0]) * DEG
+    s = sweep_defect_angle(b218, op, LOADS, INNER, centres)
+    assert np.all(np.asarray(s.result) == 0)
+    over = np.abs(centres) <= 4 * DEG
+    np.testing.assert_array_equal(np.asarray(s.spall_depth_inner[:, 0]) > 0, over)
+    assert np.all(np.asarray(s.Q_inner[over, 0]) == 0.0) and np.all(np.asarray(s.Q_inner[~over, 0]) > 0)
+    one = bs.solve(b218, op, LOADS, spall=bs.Spall(centres[1], INNER.extent, INNER.depth, "rectangular", "inner"))
+    np.testing.assert_allclose(s.Q_inner[1], one.Q_inner, rtol=1e-8, atol=1e-6)
