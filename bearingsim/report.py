@@ -79,9 +79,25 @@ def info_text(case) -> str:
         out.append(f"  {name:<6} {float(getattr(f, field)):10.3f} Hz   {float(getattr(per_hz, field)):.5f} x shaft")
     sp = case.spall()
     if sp is not None:
-        out += ["", "Spall on the outer raceway",
-                f"  centre {quantity(sp.center, 'deg', '.2f')}, extent {quantity(sp.extent, 'deg', '.3f')} "
-                f"(arc {quantity(sp.length(b), 'mm', '.3f')}), depth {quantity(sp.depth, 'mm', '.3f')}, {sp.profile}"]
+        v = {k: float(getattr(f, k)) for k in ("shaft", "ftf", "bpfo", "bpfi", "bsf", "two_bsf")}
+        size = (f"extent {quantity(sp.extent, 'deg', '.3f')} (arc {quantity(sp.length(b), 'mm', '.4f')}), "
+                f"depth {quantity(sp.depth, 'mm', '.4f')}, {sp.profile}")
+        if sp.location == "ball":
+            out += ["", f"Pit on ball {sp.ball} (MODEL.md 9)",
+                    f"  spin angle from the outer contact {quantity(sp.center, 'deg', '.2f')}, {size}",
+                    f"  impacts: once per ball turn on each raceway, 2 BSF = {v['two_bsf']:.3f} Hz in total "
+                    f"(BSF {v['bsf']:.3f} Hz), modulated at FTF = {v['ftf']:.3f} Hz "
+                    f"(lines 2 BSF +/- FTF: {v['two_bsf'] - v['ftf']:.3f}, {v['two_bsf'] + v['ftf']:.3f} Hz)"]
+        elif sp.location == "inner":
+            out += ["", "Spall on the inner raceway (turns with the inner ring, MODEL.md 9)",
+                    f"  centre at t = 0 {quantity(sp.center, 'deg', '.2f')}, {size}",
+                    f"  impacts at BPFI = {v['bpfi']:.3f} Hz, modulated at the shaft frequency "
+                    f"{v['shaft']:.3f} Hz (lines BPFI +/- f_r: {v['bpfi'] - v['shaft']:.3f}, "
+                    f"{v['bpfi'] + v['shaft']:.3f} Hz)"]
+        else:
+            out += ["", "Spall on the outer raceway",
+                    f"  centre {quantity(sp.center, 'deg', '.2f')}, {size}",
+                    f"  impacts at BPFO = {v['bpfo']:.3f} Hz (and harmonics)"]
     return "\n".join(out)
 
 

@@ -77,11 +77,14 @@ moment_x_Nm = 0
 moment_y_Nm = 0
 
 [defect]                                 # omit the section for a healthy bearing
-center_deg = 0.0
+location = "outer"                       # or "inner" (turns with the inner ring) | "ball"
+center_deg = 0.0                         # raceway spall: azimuth of its centre (at t = 0)
 extent_deg = 3.0                         # exactly one of these two:
 # length_mm = 3.725                      #   arc length along the outer raceway
 depth_mm = 0.3
 profile = "rectangular"                  # or "ball-path"
+# ball_index = 0                         # location = "ball" only: the pitted ball,
+# spin_angle_deg = 0.0                   #   and the pit's angle from its outer contact
 
 [sweep]                                  # `bearingsim sweep` and `bearingsim study`
 start_deg = -11.25

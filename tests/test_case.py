@@ -137,7 +137,8 @@ def test_defaults_filled_in():
 
 def test_defect_defaults():
     c = parse_case(MINIMAL + "[defect]\nextent_deg = 5\ndepth_mm = 0.1\n")
-    assert c.data["defect"] == {"center_deg": 0.0, "extent_deg": 5.0, "depth_mm": 0.1, "profile": "ball-path"}
+    assert c.data["defect"] == {"location": "outer", "center_deg": 0.0, "extent_deg": 5.0, "depth_mm": 0.1,
+                                "profile": "ball-path"}
 
 
 def test_sweep_stop_default_follows_start_and_balls():
@@ -756,3 +757,76 @@ def test_unit_table_round_trips_and_covers_every_key():
     assert to_si(10000, "rpm") == pytest.approx(10000 * 2 * math.pi / 60)
     assert from_si(math.pi, "deg") == pytest.approx(180.0) and label("Nm") == "N m"
     assert from_si(1.0, "N_per_mm1_5") == pytest.approx(1e3 ** -1.5)
+
+
+# ----------------------------------------------------------------------------------------------
+# inner-raceway spall and ball pit (MODEL.md section 9)
+# ----------------------------------------------------------------------------------------------
+def test_inner_spall_from_length():
+    c = parse_case(MINIMAL + '[defect]\nlocation = "inner"\ncenter_deg = 90\nlength_mm = 2.0\n'
+                             'depth_mm = 0.2\nprofile = "rectangular"\n')
+    b, s = c.bearing(), c.spall()
+    R_ir = 0.5 * (125.26e-3 - 22.225e-3 * math.cos(math.radians(40)))
+    assert s.location == "inner" and s.profile == "rectangular"
+    np.testing.assert_allclose(float(s.extent), 2.0e-3 / R_ir, rtol=1e-12)
+    np.testing.assert_allclose(float(s.length(b)), 2.0e-3, rtol=1e-12)
+    np.testing.assert_allclose(float(s.center), math.pi / 2, rtol=1e-15)
+
+
+def test_ball_pit_keys():
+    c = parse_case(MINIMAL + '[defect]\nlocation = "ball"\nball_index = 5\nspin_angle_deg = 180\n'
+                             'length_mm = 0.5\ndepth_mm = 0.2\n')
+    s = c.spall()
+    assert s.location == "ball" and s.ball == 5
+    np.testing.assert_allclose(float(s.center), math.pi, rtol=1e-15)
+    np.testing.assert_allclose(float(s.extent), 2 * 0.5 / 22.225, rtol=1e-12)   # on the ball, radius D/2
+    d = parse_case(MINIMAL + '[defect]\nlocation = "ball"\nextent_deg = 3\ndepth_mm = 0.2\n').spall()
+    assert d.ball == 0 and float(d.center) == 0.0                               # defaults
+
+
+def test_outer_keys_stay_valid_and_location_defaults_to_outer():
+    s = parse_case(EXAMPLE).spall()
+    assert s.location == "outer" and s.ball == 0
+
+
+@pytest.mark.parametrize("defect, expected", [
+    ('location = "inr"\nextent_deg = 3\ndepth_mm = 0.1\n', 'defect.location = "inr" is not allowed: must be one '
+     'of "outer", "inner", "ball" (did you mean "inner"?)'),
+    ('spin_angel_deg = 3\nextent_deg = 3\ndepth_mm = 0.1\n', "did you mean 'spin_angle_deg'?"),
+    ('location = "inner"\nball_index = 2\nextent_deg = 3\ndepth_mm = 0.1\n',
+     'defect.ball_index = 2 applies only to a ball pit: set defect.location = "ball" (it is "inner")'),
+    ('spin_angle_deg = 10\nextent_deg = 3\ndepth_mm = 0.1\n', "defect.spin_angle_deg = 10 applies only to a ball pit"),
+    ('location = "ball"\nball_index = 16\nextent_deg = 3\ndepth_mm = 0.1\n',
+     "defect.ball_index = 16 is out of range: the bearing has 16 balls (0 to 15)"),
+    ('location = "ball"\nball_index = -1\nextent_deg = 3\ndepth_mm = 0.1\n', "defect.ball_index = -1 is out of range"),
+    ('location = "ball"\ncenter_deg = 5\nextent_deg = 3\ndepth_mm = 0.1\n',
+     "defect.center_deg = 5 is not used for a ball pit"),
+    ('location = "ball"\nextent_deg = 180\ndepth_mm = 0.1\n', "a pit must be smaller than 180 deg"),
+    ('location = "ball"\nlength_mm = 35\ndepth_mm = 0.1\n', "defect.length_mm = 35 spans 180.459 deg of the ball"),
+    # R_ir = 54.1173 mm: the 22.5 deg pitch is 21.2518 mm along the inner raceway
+    ('location = "inner"\nlength_mm = 21.5\ndepth_mm = 0.1\n', "along the inner raceway (R_ir = 54.1173 mm"),
+])
+def test_inner_and_ball_defect_errors(defect, expected):
+    assert expected in one_problem(MINIMAL + "[defect]\n" + defect)
+
+
+def test_inner_and_ball_cases_round_trip_through_toml():
+    for name in ("cwru_6205_inner", "cwru_6205_ball"):
+        c = load_case(name)
+        again = parse_case(to_toml(c.raw))
+        assert again.data["defect"] == c.data["defect"]
+        a, b = c.spall(), again.spall()
+        assert (a.location, a.ball, a.profile) == (b.location, b.ball, b.profile)
+        for f in ("center", "extent", "depth"):
+            assert float(getattr(a, f)) == float(getattr(b, f))
+
+
+def test_cwru_inner_and_ball_cases():
+    outer = load_case("cwru_6205")
+    for name, loc in (("cwru_6205_inner", "inner"), ("cwru_6205_ball", "ball")):
+        c = load_case(name)
+        for sec in ("bearing", "operation", "load", "dynamics"):
+            assert c.data[sec] == outer.data[sec], (name, sec)
+        s = c.spall()
+        assert s.location == loc and c.data["defect"]["length_mm"] == 0.1778 and c.data["defect"]["depth_mm"] == 0.2794
+        np.testing.assert_allclose(float(s.length(c.bearing())), 0.1778e-3, rtol=1e-12)

@@ -190,14 +190,19 @@ class Case:
                            moment_x=ld["moment_x"], moment_y=ld["moment_y"])
 
     def spall(self):
-        """:class:`bearingsim.Spall` (rad, m), or None for a healthy bearing (no [defect])."""
+        """:class:`bearingsim.Spall` (rad, m), or None for a healthy bearing (no [defect]).  Its
+        ``location`` is [defect] location; a ball pit's ``center`` is spin_angle_deg and its
+        ``ball`` ball_index."""
         from ..defect import Spall
         if "defect" not in self.data:
             return None
         d = self.si("defect")
+        loc = d.get("location", "outer")
+        center = d.get("spin_angle", 0.0) if loc == "ball" else d["center"]
+        ball = int(d.get("ball_index", 0)) if loc == "ball" else 0
         if "length" in d:
-            return Spall.from_length(self.bearing(), d["center"], d["length"], d["depth"], d["profile"])
-        return Spall(d["center"], d["extent"], d["depth"], d["profile"])
+            return Spall.from_length(self.bearing(), center, d["length"], d["depth"], d["profile"], loc, ball)
+        return Spall(center, d["extent"], d["depth"], d["profile"], loc, ball)
 
     def sweep_settings(self) -> dict:
         """dict(start=rad, stop=rad, steps=int); defaults: 0, one ball pitch 2 pi / Z, 181."""

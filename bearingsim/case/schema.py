@@ -237,22 +237,38 @@ SCHEMA: dict[str, Section] = {
         },
     ),
     "defect": Section(
-        "Optional spall on the outer raceway (MODEL.md section 5).  Absent: healthy bearing.",
+        "Optional localized defect (MODEL.md sections 5 and 9): a spall on the outer raceway "
+        "(default), a spall on the inner raceway, or a pit on one ball.  Absent: healthy bearing.",
         {
-            "center_deg": _num("azimuth psi_d of the spall centre", "deg", 0.0),
-            "extent_deg": _num("circumferential extent of the spall", "deg", OPTIONAL, gt=0),
-            "length_mm": _num("arc length b of the spall along the outer raceway, "
-                              "radius R_o = (d_m + D cos alpha_0) / 2", "mm", OPTIONAL, gt=0),
-            "depth_mm": _num("depth d of the spall (0: healthy)", "mm", ge=0),
-            "profile": _enum("depth profile under a ball: rectangular (step) or ball-path (the ball "
-                             "centre follows the edges; continuous)", ("rectangular", "ball-path"),
+            "location": _enum("where the defect is: outer raceway, inner raceway (turns with the inner "
+                              "ring), or a pit on one ball", ("outer", "inner", "ball"), "outer"),
+            "center_deg": _num("azimuth of the spall centre (outer or inner raceway; for the inner "
+                               "raceway at the instant t = 0 of the solve, psi_di = center + omega t); "
+                               "not used for a ball pit", "deg", 0.0),
+            "extent_deg": _num("angular extent: about the bearing axis for a raceway spall, about the "
+                               "ball centre for a ball pit", "deg", OPTIONAL, gt=0),
+            "length_mm": _num("arc length b of the defect on its surface: along the outer raceway "
+                              "(R_o = (d_m + D cos alpha_0) / 2), the inner raceway "
+                              "(R_ir = (d_m - D cos alpha_0) / 2), or the pit diameter on the ball "
+                              "surface (radius D / 2)", "mm", OPTIONAL, gt=0),
+            "depth_mm": _num("depth d of the defect (0: healthy)", "mm", ge=0),
+            "profile": _enum("depth profile under a contact: rectangular (step) or ball-path (the "
+                             "contact follows the edges; continuous)", ("rectangular", "ball-path"),
                              "ball-path"),
+            "ball_index": _int("ball pit only (default 0): index j of the pitted ball (the ball at "
+                               "azimuth cage_angle + 360 j / balls)", OPTIONAL, ge=0),
+            "spin_angle_deg": _num("ball pit only (default 0): the pit's angle on the ball's rolling "
+                                   "great circle from its outer contact (0: in the outer contact, 180: "
+                                   "in the inner contact)", "deg", OPTIONAL),
         },
         fill_defaults=False,
         exactly_one=(("extent_deg", "length_mm"),),
         notes=(
-            "the spall is shorter than the ball pitch 360 deg / balls: only one ball at a time "
-            "may be over the spall",
+            "a raceway spall is shorter than the ball pitch 360 deg / balls along its raceway: only "
+            "one ball at a time may be over the spall",
+            "a ball pit spans less than 180 deg of the ball (it cannot touch both contacts at once)",
+            "ball_index < bearing.balls; ball_index and spin_angle_deg only with location = \"ball\", "
+            "center_deg not with it",
             "depth_mm < bearing.ball_diameter_mm",
         ),
     ),

@@ -247,20 +247,45 @@ def _cross_checks(data: dict, problems: list[str], raw: dict | None = None) -> N
         if "depth_mm" in d and "ball_diameter_mm" in b and not d["depth_mm"] < b["ball_diameter_mm"]:
             problems.append(f"defect.depth_mm = {shown('defect', 'depth_mm')} must be less than the ball "
                             f"diameter bearing.ball_diameter_mm = {shown('bearing', 'ball_diameter_mm')}")
-        if "balls" in b:
+        loc = d.get("location", "outer")
+        given = section_raw(raw or {}, "defect") or {}
+        if loc == "ball":
+            if "center_deg" in given:
+                problems.append(f"defect.center_deg = {shown('defect', 'center_deg')} is not used for a ball "
+                                "pit (location = \"ball\"): give its position as defect.spin_angle_deg")
+            if "balls" in b and "ball_index" in d and not d["ball_index"] < b["balls"]:
+                problems.append(f"defect.ball_index = {shown('defect', 'ball_index')} is out of range: the "
+                                f"bearing has {b['balls']} balls (0 to {b['balls'] - 1})")
+            if "extent_deg" in d and not d["extent_deg"] < 180.0:
+                problems.append(f"defect.extent_deg = {shown('defect', 'extent_deg')} spans half the ball or "
+                                "more: a pit must be smaller than 180 deg (it cannot touch both contacts)")
+            if "length_mm" in d and "ball_diameter_mm" in b:
+                extent = from_si(2.0 * d["length_mm"] / b["ball_diameter_mm"], "deg")
+                if not extent < 180.0:
+                    problems.append(
+                        f"defect.length_mm = {shown('defect', 'length_mm')} spans {fmt_num(extent)} deg of the "
+                        f"ball (radius {fmt_num(0.5 * b['ball_diameter_mm'])} mm): a pit must be smaller than "
+                        "180 deg (it cannot touch both contacts)")
+        else:
+            for key in ("ball_index", "spin_angle_deg"):
+                if key in d:
+                    problems.append(f"defect.{key} = {shown('defect', key)} applies only to a ball pit: set "
+                                    f"defect.location = \"ball\" (it is \"{loc}\"), or remove the key")
+        if "balls" in b and loc != "ball":
             pitch = 360.0 / b["balls"]
             if "extent_deg" in d and not d["extent_deg"] < pitch:
                 problems.append(f"defect.extent_deg = {shown('defect', 'extent_deg')} is longer than the ball "
                                 f"pitch {fmt_num(pitch)} deg: only one ball at a time may be over the spall")
             alpha0 = _free_contact_angle_deg(b)
             if "length_mm" in d and geometry_ok and alpha0 is not None:
-                R_o = 0.5 * (b["pitch_diameter_mm"] + b["ball_diameter_mm"] * math.cos(to_si(alpha0, "deg")))
+                sign, name, sym = (1.0, "outer", "R_o") if loc == "outer" else (-1.0, "inner", "R_ir")
+                R_o = 0.5 * (b["pitch_diameter_mm"] + sign * b["ball_diameter_mm"] * math.cos(to_si(alpha0, "deg")))
                 extent = from_si(d["length_mm"] / R_o, "deg")
                 if not extent < pitch:
                     problems.append(
                         f"defect.length_mm = {shown('defect', 'length_mm')} is longer than the ball pitch "
-                        f"{fmt_num(pitch)} deg = {fmt_num(to_si(pitch, 'deg') * R_o)} mm along the outer "
-                        f"raceway (R_o = {fmt_num(R_o)} mm; the spall spans {fmt_num(extent)} deg): "
+                        f"{fmt_num(pitch)} deg = {fmt_num(to_si(pitch, 'deg') * R_o)} mm along the {name} "
+                        f"raceway ({sym} = {fmt_num(R_o)} mm; the spall spans {fmt_num(extent)} deg): "
                         f"only one ball at a time may be over the spall")
 
     _dataset_checks(data, problems, geometry_ok, raw)
