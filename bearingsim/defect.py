@@ -36,7 +36,7 @@ PROFILES = ("rectangular", "ball-path")
 LOCATIONS = ("outer", "inner", "ball")
 
 __all__ = ["PROFILES", "LOCATIONS", "Spall", "NO_SPALL", "as_defects", "wrap_angle",
-           "surface_radius", "depth_profile", "contact_depths", "ball_pit_depths"]
+           "surface_radius", "depth_profile", "contact_depths", "ball_pit_depths", "advance"]
 
 
 def _f64(x):
@@ -182,3 +182,22 @@ def contact_depths(bearing, spall, psi):
             Ho = jnp.maximum(Ho, jnp.where(mine, ho[..., None] if jnp.ndim(ho) else ho, 0.0))
             Hi = jnp.maximum(Hi, jnp.where(mine, hi[..., None] if jnp.ndim(hi) else hi, 0.0))
     return Ho, Hi
+
+
+def advance(spall, t, shaft_speed, spin_speed=0.0):
+    """The defects at time t (s) from their state at t = 0: an outer spall stays, an inner spall
+    turns with the inner ring (center + omega t, ``shaft_speed`` omega in rad/s), a ball pit turns
+    with its ball relative to the cage (center + omega_R t, ``spin_speed`` omega_R in rad/s, e.g.
+    2 pi BSF or ``ball_kinematics(...).spin_speed``).  The pitted ball's own azimuth is the cage's
+    business (theta_c(t) + 2 pi j / Z).  Returns the same structure (a Spall or a tuple); pure JAX
+    (t may be traced), so ``contact_depths(bearing, advance(spall, t, w, wR), psi(t))`` gives
+    (H_outer, H_inner) per ball at any instant."""
+    def one(sp):
+        if sp.location == "outer":
+            return sp
+        rate = shaft_speed if sp.location == "inner" else spin_speed
+        return eqx.tree_at(lambda s: s.center, sp, sp.center + rate * t)
+
+    if isinstance(spall, Spall):
+        return one(spall)
+    return tuple(one(sp) for sp in as_defects(spall))

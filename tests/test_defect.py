@@ -315,3 +315,16 @@ def test_sweep_of_the_inner_spall_azimuth(b218):
     assert np.all(np.asarray(s.Q_inner[over, 0]) == 0.0) and np.all(np.asarray(s.Q_inner[~over, 0]) > 0)
     one = bs.solve(b218, op, LOADS, spall=bs.Spall(centres[1], INNER.extent, INNER.depth, "rectangular", "inner"))
     np.testing.assert_allclose(s.Q_inner[1], one.Q_inner, rtol=1e-8, atol=1e-6)
+
+
+def test_advance_in_time(b218):
+    """psi_di = phi_d + omega t for the inner spall, theta_b = theta_b0 + omega_R t for the pit;
+    the outer spall stays put."""
+    from bearingsim.defect import advance
+    w, wR, t = 100.0, 250.0, 0.013
+    o, i, p = (bs.Spall(0.1, 0.05, 1e-4, "ball-path", loc, 2) for loc in ("outer", "inner", "ball"))
+    ao, ai, ap = advance((o, i, p), t, w, wR)
+    assert float(ao.center) == 0.1 and float(ai.center) == pytest.approx(0.1 + w * t, rel=1e-15)
+    assert float(ap.center) == pytest.approx(0.1 + wR * t, rel=1e-15) and ap.ball == 2 and ai.location == "inner"
+    dH = jax.grad(lambda tt: contact_depths(b218, advance(i, tt, w), b218.ball_azimuths(0.1 + w * t + 0.01))[1][0])(t)
+    assert np.isfinite(float(dH)) and float(dH) != 0.0            # ball-path: the depth moves with t
