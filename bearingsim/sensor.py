@@ -1,0 +1,135 @@
+"""Sensor path (MODEL.md section 7): structural resonances driven by the housing acceleration,
+and measurement noise.
+
+The sensor sits on the housing behind one or more lightly damped structural modes.  Mode k
+(natural frequency f_k, damping ratio zeta_k, gain g_k) is a base-excited oscillator whose
+relative displacement z_k obeys
+
+    z_k'' + 2 zeta_k w_k z_k' + w_k^2 z_k = -a_h(t),        w_k = 2 pi f_k,
+
+with a_h the housing acceleration along x.  The sensor reads
+
+    a_s = a_h + sum_k g_k z_k''        (one mode with g = 1: the absolute acceleration of a
+                                        resonator on the housing, Sawalhi & Randall 2008).
+
+The modes are linear and one-way coupled (their reaction on the housing is neglected, see
+docs/dynamics.md for its size), so they are not integrated with the shaft/housing equations:
+they are applied afterwards, *exactly*, with the first-order-hold (FOH) discretisation of each
+mode over the integrator's step h -- exact when a_h varies linearly between steps, for any
+f_k h (no step-size limit from the resonances).  With s = (z, z') and v_n = (u_{n+1} - u_n)/h,
+
+    s_{n+1} = Phi s_n + Gamma0 u_n + Gamma1 v_n,      z''_n = C s_n - u_n,
+
+where exp(h [[A, B, 0], [0, 0, 1], [0, 0, 0]]) = [[Phi, Gamma0, Gamma1], [0, 1, 1], [0, 0, 1]]
+(A = [[0, 1], [-w^2, -2 zeta w]], B = [0, -1], C = [-w^2, -2 zeta w]).
+
+Noise (:func:`measurement_noise`) is Gaussian, white or band-limited, at a given RMS, drawn
+from ``numpy.random.default_rng(seed)`` (reproducible, per item).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+__all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
+           "apply_sensor", "measurement_noise", "G"]
+
+#: standard gravity (m/s^2), for noise levels given in g
+G = 9.80665
+
+
+class SensorFilter(NamedTuple):
+    """Discretised modes (arrays with a leading mode axis M)."""
+
+    Phi: jnp.ndarray       # (M, 2, 2)
+    Gamma0: jnp.ndarray    # (M, 2)
+    Gamma1: jnp.ndarray    # (M, 2), divided by h (multiplies u_{n+1} - u_n)
+    C: jnp.ndarray         # (M, 2)
+    gain: jnp.ndarray      # (M,)
+    w: jnp.ndarray         # (M,) rad/s
+    zeta: jnp.ndarray      # (M,)
+
+
+def sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:
+    """FOH-exact discretisation of the modes over a step h (s).  Pure JAX (jit/vmap-able)."""
+    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
+    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
+    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
+    h = jnp.asarray(h, jnp.float64)
+
+    def one(fk, zk):
+        w = 2.0 * jnp.pi * fk
+        M = jnp.zeros((4, 4)).at[0, 1].set(1.0).at[1, 0].set(-w * w).at[1, 1].set(-2.0 * zk * w)
+        M = M.at[1, 2].set(-1.0).at[2, 3].set(1.0)
+        E = jax.scipy.linalg.expm(M * h)
+        return E[:2, :2], E[:2, 2], E[:2, 3] / h, jnp.stack([-w * w, -2.0 * zk * w])
+
+    Phi, G0, G1, C = jax.vmap(one)(f, z)
+    return SensorFilter(Phi, G0, G1, C, g, 2.0 * jnp.pi * f, z)
+
+
+def filter_init(flt: SensorFilter):
+    """Modes at rest relative to the housing: s = 0, (M, 2)."""
+    return jnp.zeros(flt.C.shape)
+
+
+def step_response(flt: SensorFilter, tau):
+    """(M, 2) state (z, z') of every mode a time tau after a unit step of the input, from rest."""
+    w, z = flt.w, flt.zeta
+    wd = w * jnp.sqrt(1.0 - z * z)
+    e = jnp.exp(-z * w * tau)
+    c, s = jnp.cos(wd * tau), jnp.sin(wd * tau)
+    return jnp.stack([-(1.0 - e * (c + z * w / wd * s)) / (w * w), -e * s / wd], axis=-1)
+
+
+def filter_update(flt: SensorFilter, s, u0, u1, jump_at=None, h=None):
+    """State after one step with the input going linearly from u0 to u1; or, where ``jump_at``
+    (fraction of the step h) is >= 0, holding u0 and jumping to u1 at that instant (exact for a
+    force step inside the step, e.g. a ball crossing a rectangular spall edge)."""
+    base = jnp.einsum("mij,mj->mi", flt.Phi, s) + flt.Gamma0 * u0
+    ramp = flt.Gamma1 * (u1 - u0)
+    if jump_at is None:
+        return base + ramp
+    jump = step_response(flt, jnp.maximum(1.0 - jump_at, 0.0) * h) * (u1 - u0)
+    return base + jnp.where(jump_at >= 0.0, jump, ramp)
+
+
+def filter_output(flt: SensorFilter, s, u):
+    """Sensor acceleration a_h + sum_k g_k z_k'' for state s and input u."""
+    zdd = jnp.sum(flt.C * s, axis=-1) - u
+    return u + jnp.sum(flt.gain * zdd)
+
+
+def apply_sensor(housing_acceleration, h, frequencies, damping_ratios, gains=1.0):
+    """The sensor signal of a housing-acceleration record sampled every h (s), modes at rest at
+    the first sample.  Pure JAX; for signals outside a simulation (e.g. a different sensor
+    path on a stored run: the step is then the sample interval)."""
+    u = jnp.asarray(housing_acceleration, jnp.float64)
+    flt = sensor_filter(frequencies, damping_ratios, gains, h)
+
+    def body(carry, u1):
+        s, u0 = carry
+        s = filter_update(flt, s, u0, u1)
+        return (s, u1), filter_output(flt, s, u1)
+
+    _, out = lax.scan(body, (filter_init(flt), u[0]), u[1:])
+    return jnp.concatenate([jnp.atleast_1d(filter_output(flt, filter_init(flt), u[0])), out])
+
+
+def measurement_noise(rng: np.random.Generator, n, rms, fs=None, band=None) -> np.ndarray:
+    """n samples of zero-mean Gaussian noise with the given RMS (m/s^2).  ``band`` = (lo, hi) Hz
+    (with ``fs``): the noise is band-limited by zeroing its spectrum outside the band, then
+    rescaled to the RMS; None: white up to fs/2."""
+    x = rng.standard_normal(n)
+    if band is not None and n > 1:
+        lo, hi = band
+        X = np.fft.rfft(x)
+        f = np.fft.rfftfreq(n, 1.0 / float(fs))
+        X[(f < lo) | (f > hi)] = 0.0
+        x = np.fft.irfft(X, n)
+    s = float(np.sqrt(np.mean(x * x))) if n else 0.0
+    return x * (float(rms) / s) if s > 0 else x * 0.0
