@@ -825,8 +825,11 @@ def test_cwru_inner_and_ball_cases():
     outer = load_case("cwru_6205")
     for name, loc in (("cwru_6205_inner", "inner"), ("cwru_6205_ball", "ball")):
         c = load_case(name)
-        for sec in ("bearing", "operation", "load", "dynamics"):
+        # the same bearing and operating point as the outer-race case ([load] and [dynamics] are
+        # copies of its blocks at the time of writing; its calibration may move on)
+        for sec in ("bearing", "operation"):
             assert c.data[sec] == outer.data[sec], (name, sec)
+        assert c.data["dynamics"]["sample_rate_Hz"] == outer.data["dynamics"]["sample_rate_Hz"]
         s = c.spall()
         assert s.location == loc and c.data["defect"]["length_mm"] == 0.1778 and c.data["defect"]["depth_mm"] == 0.2794
         np.testing.assert_allclose(float(s.length(c.bearing())), 0.1778e-3, rtol=1e-12)
