@@ -3,25 +3,44 @@
 A data set spec is an ordinary case file plus a ``[dataset]`` section (see the case reference):
 ``count`` item labels (speed, radial and axial load, spall length / depth / centre) are drawn
 reproducibly with ``numpy.random.default_rng(seed)``, uniform in each [min, max] range, the
-first ``round(healthy_fraction * count)`` items healthy (spall depth and length 0).  The items
-are simulated ``chunk`` at a time with :func:`bearingsim.dynamics.simulate_batch` (the last
-chunk padded so nothing recompiles) and streamed into one HDF5 file, written atomically:
+first ``round(healthy_fraction * count)`` items healthy (spall depth and length 0).  Every item
+has its own realism seed (slip, speed fluctuation, noise: the [dynamics] keys), derived from
+(seed, index), so an item's signal does not depend on which chunk it falls in.  The items are
+simulated ``chunk`` at a time with :func:`bearingsim.dynamics.simulate_batch` (the last chunk
+padded so nothing recompiles; the ball Newton steps and substeps fixed once for the data set).
+
+Resumable and interruptible.  Each finished chunk is saved at once (atomically) in the folder
+``<path>.partial/`` next to the output; an interrupted run (Ctrl-C, SIGTERM, a crash) keeps
+every finished chunk, and running the same command again continues from them (a spec that
+differs from the one the folder was started with is refused).  When every chunk is there the
+HDF5 file is assembled from the folder in item order (atomically; the folder is then removed),
+so the same spec and seed give a bit-identical file however often the run was interrupted.
+Memory stays bounded by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` (exit code
+130) with a one-line message; nothing temporary is left behind.
 
 ``/signals``  float32 (N, T) sensor acceleration, m/s^2 (chunks (1, T), gzip)
 ``/time``     float64 (T,) s
 ``/labels``   compound (N,): index, healthy, speed_rpm, radial_N, axial_N, spall_length_mm,
-              spall_depth_mm, spall_center_deg, bpfo_Hz, ftf_Hz, shaft_Hz, result (0 = ok)
+              spall_depth_mm, spall_center_deg, bpfo_Hz, ftf_Hz, shaft_Hz, result (0 = ok),
+              realism_seed, slip_percent, pass_jitter_percent (the std of the item's drawn
+              pass-interval factors), speed_fluctuation_percent, noise_rms_m_s2
 
 Root attributes ``bearingsim_version``, ``case_toml``, ``seed`` (and ``count``,
-``sample_rate_Hz``, ``duration_s``, ``balls``).  Items whose simulation failed keep a zero signal
-and a result code != 0 (:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus
-``nonfinite_signal``); nothing written is NaN.  ``/labels`` has the attributes ``field_units``
-and ``result_messages`` (JSON objects).
+``sample_rate_Hz``, ``duration_s``, ``balls``, ``ball_iterations``, ``substeps``, ``scheme``).
+Items whose simulation failed keep a zero signal and a result code != 0
+(:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus ``nonfinite_signal``);
+nothing written is NaN.  ``/labels`` has the attributes ``field_units`` and
+``result_messages`` (JSON objects).
 """
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import signal
+import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,10 +50,10 @@ from . import dynamics
 from ._version import __version__
 from .case import check_sampling
 from .case.units import from_si, to_si
-from .errors import InputError, ResultCode
+from .errors import BearingsimError, InputError, ResultCode
 
-__all__ = ["LABEL_FIELDS", "DatasetResult", "DatasetSummary", "draw_labels", "make_dataset",
-           "result_messages"]
+__all__ = ["LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
+           "item_seeds", "make_dataset", "partial_path", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
 LABEL_FIELDS: dict[str, tuple[str, str]] = {
@@ -50,29 +69,24 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "ftf_Hz": ("<f8", "Hz"),
     "shaft_Hz": ("<f8", "Hz"),
     "result": ("<i4", "-"),
+    "realism_seed": ("<u4", "-"),
+    "slip_percent": ("<f8", "%"),
+    "pass_jitter_percent": ("<f8", "%"),
+    "speed_fluctuation_percent": ("<f8", "%"),
+    "noise_rms_m_s2": ("<f8", "m/s^2"),
 }
 LABEL_DTYPE = np.dtype([(k, v[0]) for k, v in LABEL_FIELDS.items()])
 
 #: ranges of [dataset], in the order they are drawn
 _RANGES = ("speed_rpm", "radial_N", "axial_N", "spall_length_mm", "spall_depth_mm", "spall_center_deg")
 
-#: names of the dynamics' result codes while bearingsim.dynamics still has a plain dict of them
-_DYNAMICS_NAMES = {0: "successful", 1: "max_steps_reached", 2: "integration_failed",
-                   3: "initial_state_not_converged"}
-
 
 def _result_members():
-    """(name, (code, message, hint)) of the dynamics' result codes, then ``nonfinite_signal``
-    (4, or the first code after the dynamics' own)."""
-    codes = getattr(dynamics, "RESULTS", None)
-    if codes is not None:
-        members = [(m.name, (int(m), m.message, m.hint)) for m in codes]
-    else:
-        members = [(_DYNAMICS_NAMES.get(c, f"code_{c}"), (c, msg, ""))
-                   for c, msg in dynamics.RESULT_MESSAGES.items()]
-    nonfinite = max([4] + [v[0] + 1 for _, v in members])
+    """(name, (code, message, hint)) of the dynamics' result codes, then ``nonfinite_signal``."""
+    members = [(m.name, (int(m), m.message, m.hint)) for m in dynamics.RESULTS]
+    nonfinite = max(v[0] for _, v in members) + 1
     return members + [("nonfinite_signal", (nonfinite, "the simulated signal is not finite",
-                                            "tighten [dynamics] rtol/atol; check the structural "
+                                            "use more [dynamics] substeps; check the structural "
                                             "parameters"))]
 
 
@@ -151,84 +165,149 @@ def _order(healthy: np.ndarray) -> np.ndarray:
     return np.concatenate([h, s])[np.argsort(key, kind="stable")]
 
 
-def _ball_iterations(case, lab, extent, depth, profile):
-    """Lean ball-solver Newton steps for the whole data set (as simulate_batch's "auto", on the
-    fastest and the most heavily loaded item), fixed once so that no chunk recompiles."""
-    import jax.numpy as jnp
+class Interrupted(BearingsimError):
+    """The run was interrupted (Ctrl-C / SIGTERM); finished chunks are kept (exit code 130)."""
 
-    from .defect import Spall
-    from .dynamics import _MAX_ITER, choose_iterations
-    from .hertz import stiffness_curve
-    from .jones import load_vector, solve
+    exit_code = 130
+
+
+class _Stop(BaseException):
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.name = signal.Signals(signum).name
+
+
+@contextmanager
+def _signals_stop():
+    """SIGINT and SIGTERM raise :class:`_Stop` (so that cleanup runs) while the block runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise _Stop(signum)
+
+    old = {sg: signal.signal(sg, handler) for sg in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sg, h in old.items():
+            signal.signal(sg, h)
+
+
+def partial_path(path) -> Path:
+    """The folder that holds the finished chunks of an unfinished run writing ``path``."""
+    path = Path(path)
+    return path.with_name(path.name + ".partial")
+
+
+def item_seeds(seed, n) -> np.ndarray:
+    """Realism seed of every item: from (data set seed, item index)."""
+    return np.array([np.random.SeedSequence([int(seed), i]).generate_state(1)[0] for i in range(n)],
+                    dtype=np.uint32)
+
+
+def _run_settings(case, lab, extent, depth, center, profile, fs, params):
+    """(ball Newton steps, substeps) for the whole data set: :func:`dynamics.batch_settings` on
+    the fastest and the most heavily loaded item (one Newton step of margin), fixed once so that
+    no chunk recompiles."""
+    from .jones import load_vector
     from .kinematics import Operation
+    from .defect import Spall
 
     b = case.bearing()
     o = case.data["operation"]
-    curve = stiffness_curve(b, case.hertz_method)
-    its = []
-    for i in {int(np.argmax(lab["speed_rpm"])), int(np.argmax(lab["radial_N"] + lab["axial_N"]))}:
+    its, subs = [], []
+    for i in sorted({int(np.argmax(lab["speed_rpm"])), int(np.argmax(lab["radial_N"] + lab["axial_N"]))}):
         op = Operation.from_rpm(float(lab["speed_rpm"][i]), o["raceway_control"], True, True)
         F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
-        sp = Spall(float(to_si(lab["spall_center_deg"][i], "deg")), float(extent[i]), float(depth[i]), profile)
-        sol = solve(b, op, F, cage_angle=case.cage_angle, spall=sp, hertz_method=case.hertz_method,
-                    throw=False)
-        if int(sol.result) != 0:
-            continue
-        its.append(choose_iterations(b, op, jnp.asarray(sol.displacement), sp, curve, case.cage_angle))
-    if not its or 0 in its:
-        return 0
-    return min(max(its) + 1, _MAX_ITER)
+        sp = Spall(float(center[i]), float(extent[i]), float(depth[i]), profile)
+        it, sub = dynamics.batch_settings(b, op, F, sp, case.cage_angle, fs, params, case.hertz_method)
+        if it is not None:
+            its.append(it)
+            subs.append(sub)
+    it = min(max(its) + 1, 4) if its else 4
+    return it, max(subs, default=1)
 
 
-def make_dataset(case, path, progress=True) -> DatasetSummary:
-    """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5, atomically).
+def _spec_record(case, ds, n, T, fs, chunk):
+    return {"bearingsim_version": __version__, "case_toml": case.text, "seed": int(ds["seed"]),
+            "count": n, "samples": T, "sample_rate_Hz": fs, "chunk": chunk}
 
-    Memory stays bounded by one chunk whatever the count: each chunk is written as soon as it
-    is simulated.  Returns a :class:`DatasetSummary` (``failed``: items with result != 0)."""
+
+def _open_partial(folder: Path, spec: dict, settings):
+    """The partial folder of this spec (created if absent) and its (ball_iterations, substeps)."""
+    f = folder / "spec.json"
+    if f.exists():
+        try:
+            old = json.loads(f.read_text())
+        except (OSError, ValueError):
+            old = None
+        if old is None or {k: old.get(k) for k in spec} != spec:
+            raise InputError(f"{folder} holds the finished chunks of a run with a different spec (or "
+                             "bearingsim version); delete it to start afresh, or write elsewhere")
+        return old["ball_iterations"], old["substeps"]
+    it, sub = settings()
+    folder.mkdir(parents=True, exist_ok=True)
+    _write_atomic(f, lambda fh: fh.write(json.dumps(dict(spec, ball_iterations=it, substeps=sub)).encode()))
+    return it, sub
+
+
+def _write_atomic(path: Path, write):
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with open(tmp, "wb") as fh:
+            write(fh)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _chunk_file(folder: Path, k: int) -> Path:
+    return folder / f"chunk_{k:06d}.npz"
+
+
+_CHUNK_FIELDS = ("result", "bpfo_Hz", "pass_jitter_percent")
+
+
+def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
+                    duration, fs, seeds, it, sub):
+    m = idx.size
+    pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
+    res = dynamics.simulate_batch(
+        b, lab["speed_rpm"][pad], loads[pad], center[pad], extent[pad], depth[pad], profile, params,
+        duration, fs, case.cage_angle, realism=realism, seeds=seeds[pad],
+        control=case.data["operation"]["raceway_control"], hertz_method=case.hertz_method,
+        ball_iterations=it, substeps=sub)
+    a = np.asarray(res.sensor_acceleration)[:m]
+    code = np.asarray(res.result)[:m].astype(np.int32)
+    finite = np.all(np.isfinite(a), axis=1)
+    code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
+    ok = code == 0
+    bpfo = np.asarray(res.bpfo_Hz)[:m]
+    jitter = np.array([r["pass_jitter_percent"] for r in res.realism[:m]])
+    return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
+                bpfo_Hz=np.where(np.isfinite(bpfo) & ok, bpfo, 0.0), pass_jitter_percent=jitter)
+
+
+def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme, chunks):
+    """Write the HDF5 file from the finished chunks, in item order (atomically)."""
     import h5py
-    from tqdm import tqdm
-
-    ds = _settings(case)
-    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
 
     from . import io
-    from .dynamics import DynamicsParameters, _time_grid, simulate_batch
 
-    d = case.dynamics_settings()
-    b = case.bearing()
-    Z = b.n_balls
-    o = case.data["operation"]
-    # simulate_batch uses the default raceway control/centrifugal/gyroscopic flags of Operation
-    if not (o["centrifugal"] and o["gyroscopic"]):
-        raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
-                         "operation.gyroscopic true (the batch simulation always includes them)")
-    profile = case.data.get("defect", {}).get("profile", "rectangular")
-    params = DynamicsParameters.from_settings(d)
-    fs = float(d["sample_rate"])
-    duration = float(ds["duration_s"])
-    ts = _time_grid(duration, fs)
-    T = ts.size
-    lab = draw_labels(case)
     n = lab.size
-    chunk = min(int(ds["chunk"]), n)
-    R_o = float(b.outer_raceway_radius)
-    # healthy items: depth 0 (that is what healthy means to the model) over a spall of the
-    # largest length of the range, so that the step limit of the chunk (a quarter of the time
-    # a ball takes to cross its shortest spall) is not driven to zero
-    sim_len = to_si(np.where(lab["healthy"], float(ds["spall_length_mm"][1]), lab["spall_length_mm"]), "mm")
-    extent = sim_len / R_o
-    depth = to_si(lab["spall_depth_mm"], "mm")
-    center = to_si(lab["spall_center_deg"], "deg")
-    loads = np.zeros((n, 5))
-    loads[:, 0] = lab["radial_N"]
-    loads[:, 2] = lab["axial_N"]
-    order = _order(lab["healthy"])
-    iterations = _ball_iterations(case, lab, extent, depth, profile)
+    Z = case.bearing().n_balls
+    for k in range(chunks):
+        with np.load(_chunk_file(folder, k)) as c:
+            idx = c["index"]
+            for name in _CHUNK_FIELDS:
+                lab[name][idx] = c[name]
+    lab["ftf_Hz"] = lab["bpfo_Hz"] / Z
+    lab["shaft_Hz"] = from_si(to_si(lab["speed_rpm"], "rpm"), "rev_s")
     units = {k: u for k, (_, u) in LABEL_FIELDS.items()}
-    failed = 0
-    t0 = time.perf_counter()
     with io.atomic_path(path) as tmp:
-        with h5py.File(tmp, "w") as f:
+        with h5py.File(tmp, "w", track_order=True) as f:
             f.attrs["bearingsim_version"] = __version__
             f.attrs["case_toml"] = case.text
             f.attrs["seed"] = int(ds["seed"])
@@ -236,55 +315,103 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
             f.attrs["balls"] = Z
             f.attrs["sample_rate_Hz"] = fs
             f.attrs["duration_s"] = duration
-            f.attrs["ball_iterations"] = int(iterations)
+            f.attrs["ball_iterations"] = int(it)
+            f.attrs["substeps"] = int(sub)
+            f.attrs["scheme"] = scheme
             sig = f.create_dataset("signals", shape=(n, T), dtype="float32", chunks=(1, T),
                                    compression="gzip", fillvalue=0.0)
             sig.attrs["units"] = "m/s^2"
-            sig.attrs["description"] = ("sensor (resonator) acceleration; row i has the labels "
-                                        "/labels[i]; zero where result != 0")
+            sig.attrs["description"] = ("sensor acceleration (sensor modes, slip, speed fluctuation and "
+                                        "noise of the [dynamics] keys); row i has the labels /labels[i]; "
+                                        "zero where result != 0")
+            for k in range(chunks):                    # one chunk in memory at a time
+                with np.load(_chunk_file(folder, k)) as c:
+                    for j, i in enumerate(c["index"]):
+                        sig[i] = c["signals"][j]
             tm = f.create_dataset("time", data=ts)
             tm.attrs["units"] = "s"
-            msgs = result_messages()
-            bar = tqdm(total=n, desc="dataset", unit="item", disable=None if progress else True,
-                       dynamic_ncols=True)
-            try:
-                for k in range(0, n, chunk):
-                    idx = order[k:k + chunk]
-                    m = idx.size
-                    pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
-                    seed = int(np.random.SeedSequence([int(ds["seed"]), k // chunk]).generate_state(1)[0])
-                    res = simulate_batch(
-                        b, lab["speed_rpm"][pad], loads[pad], center[pad], extent[pad], depth[pad],
-                        profile, params, duration, fs, case.cage_angle, d["rtol"], d["atol"],
-                        d["noise_rms"], seed, o["raceway_control"], case.hertz_method,
-                        ball_iterations=iterations)
-                    a = np.asarray(res.sensor_acceleration)[:m]
-                    code = np.asarray(res.result)[:m].astype(np.int32)
-                    bpfo = np.asarray(res.bpfo_Hz)[:m]
-                    finite = np.all(np.isfinite(a), axis=1)
-                    code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
-                    ok = code == 0
-                    a = np.where(ok[:, None], a, 0.0).astype(np.float32)
-                    bpfo = np.where(np.isfinite(bpfo), bpfo, 0.0)
-                    lab["result"][idx] = code
-                    lab["bpfo_Hz"][idx] = bpfo
-                    lab["ftf_Hz"][idx] = bpfo / Z
-                    lab["shaft_Hz"][idx] = from_si(to_si(lab["speed_rpm"][idx], "rpm"), "rev_s")
-                    for j, i in enumerate(idx):       # rows out of order; one (1, T) chunk each
-                        sig[i] = a[j]
-                    failed += int(np.sum(~ok))
-                    bar.update(m)
-                    if failed:
-                        bar.set_postfix(failed=failed)
-            finally:
-                bar.close()
             lb = f.create_dataset("labels", data=lab)
             lb.attrs["units"] = "see field_units"
             lb.attrs["field_units"] = json.dumps(units)     # JSON {field: unit}
-            lb.attrs["result_messages"] = json.dumps({str(c): t for c, t in msgs.items()})
+            lb.attrs["result_messages"] = json.dumps({str(c): t for c, t in result_messages().items()})
             lb.attrs["description"] = (
                 "one row per item (row i of /signals); healthy items have spall depth and length 0; "
-                "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item; result 0 = ok")
-    codes, counts = np.unique(lab["result"][lab["result"] != 0], return_counts=True)
-    return DatasetSummary(Path(path), n, T, failed, time.perf_counter() - t0,
+                "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item; result 0 = ok; "
+                "realism_seed seeds the item's slip, speed fluctuation and noise")
+
+
+def make_dataset(case, path, progress=True) -> DatasetSummary:
+    """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5), resumably.
+
+    Finished chunks go to :func:`partial_path` at once; a rerun after an interruption continues
+    from them; the file is assembled when all are there.  Ctrl-C / SIGTERM raise
+    :class:`Interrupted`.  Returns a :class:`DatasetSummary` (``failed``: items with result != 0;
+    ``seconds``: wall time of this run's simulations, compilation included)."""
+    from tqdm import tqdm
+
+    ds = _settings(case)
+    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
+    d = case.dynamics_settings()
+    b = case.bearing()
+    o = case.data["operation"]
+    # simulate_batch uses the default centrifugal/gyroscopic flags of Operation
+    if not (o["centrifugal"] and o["gyroscopic"]):
+        raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
+                         "operation.gyroscopic true (the batch simulation always includes them)")
+    profile = case.data.get("defect", {}).get("profile", "rectangular")
+    params = dynamics.DynamicsParameters.from_settings(d)
+    realism = dynamics.Realism.from_settings(d)
+    fs = float(d["sample_rate"])
+    duration = float(ds["duration_s"])
+    T = int(round(duration * fs))
+    ts = np.arange(T) / fs
+    lab = draw_labels(case)
+    n = lab.size
+    chunk = min(int(ds["chunk"]), n)
+    extent = to_si(lab["spall_length_mm"], "mm") / float(b.outer_raceway_radius)
+    depth = to_si(lab["spall_depth_mm"], "mm")
+    center = to_si(lab["spall_center_deg"], "deg")
+    loads = np.zeros((n, 5))
+    loads[:, 0] = lab["radial_N"]
+    loads[:, 2] = lab["axial_N"]
+    seeds = item_seeds(ds["seed"], n)
+    lab["realism_seed"] = seeds
+    lab["slip_percent"] = realism.slip_percent
+    lab["speed_fluctuation_percent"] = realism.speed_fluctuation_percent
+    lab["noise_rms_m_s2"] = realism.noise_rms
+    order = _order(lab["healthy"])
+    chunks = -(-n // chunk)
+    folder = partial_path(path)
+    spec = _spec_record(case, ds, n, T, fs, chunk)
+    t0 = time.perf_counter()
+    done = 0
+    bar = None
+    try:
+        with _signals_stop():
+            it, sub = _open_partial(folder, spec, lambda: _run_settings(
+                case, lab, extent, depth, center, profile, fs, params))
+            todo = [k for k in range(chunks) if not _chunk_file(folder, k).exists()]
+            done = sum(min(chunk, n - k * chunk) for k in range(chunks)) - \
+                sum(min(chunk, n - k * chunk) for k in todo)
+            bar = tqdm(total=n, initial=done, desc="dataset", unit="item",
+                       disable=None if progress else True, dynamic_ncols=True)
+            for k in todo:
+                idx = order[k * chunk:(k + 1) * chunk]
+                out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
+                                      params, realism, duration, fs, seeds, it, sub)
+                _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
+                done += idx.size
+                bar.update(idx.size)
+            bar.close()
+            _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, "newmark", chunks)
+            shutil.rmtree(folder, ignore_errors=True)
+    except (_Stop, KeyboardInterrupt) as e:
+        if bar is not None:
+            bar.close()
+        how = e.name if isinstance(e, _Stop) else "SIGINT"
+        raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
+                          "the same command again to continue") from None
+    failed = lab["result"] != 0
+    codes, counts = np.unique(lab["result"][failed], return_counts=True)
+    return DatasetSummary(Path(path), n, T, int(failed.sum()), time.perf_counter() - t0,
                           {int(c): int(k) for c, k in zip(codes, counts)})

@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 
 from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
+from bearingsim.cli import main
 from bearingsim.dataset import LABEL_FIELDS, draw_labels, make_dataset
 from bearingsim.errors import NotConvergedError
 from bearingsim.workflows import dataset_case, envelope_band
 from bearingsim.signal import envelope_spectrum, peak_frequency
 
 ROOT = Path(__file__).resolve().parent.parent
-CWRU = (ROOT / "cases" / "cwru_6205.toml").read_text()
+CWRU = (ROOT / "tests" / "data" / "cwru_like_6205.toml").read_text()      # fixed, not calibrated
 
 
 def spec(duration=0.02, extra=""):
@@ -159,10 +160,11 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
         code[1] = 1                            # second slot: max steps reached
         x[1] = np.nan
         return dyn.DynamicsBatchResult(np.arange(480) / 24000.0, x, None, code, np.zeros(n),
-                                       np.full(n, 10.0), np.full(n, np.nan))
+                                       np.full(n, 10.0), np.full(n, np.nan),
+                                       [{"pass_jitter_percent": 0.0}] * n)
 
     monkeypatch.setattr(dyn, "simulate_batch", fake_batch)
-    monkeypatch.setattr(dsm, "_ball_iterations", lambda *a: 3)
+    monkeypatch.setattr(dsm, "_run_settings", lambda *a: (1, 1))
     with pytest.raises(NotConvergedError, match="spec.toml: 4 of 6 items of the data set failed"):
         dataset_case(spec(), tmp_path / "f.h5")
     s = dataset_case(spec(), tmp_path / "f.h5", throw=False)
@@ -173,3 +175,87 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
     assert bad.sum() == 4 and set(L["result"][bad]) == {1, int(dsm.DatasetResult.nonfinite_signal)}
     assert np.all(x[bad] == 0) and np.all(x[~bad] == 1)
     assert np.all(np.isfinite(L["bpfo_Hz"])) and np.all(L["bpfo_Hz"] == 0)
+
+
+def _interrupting(monkeypatch, at_call, how):
+    """simulate_batch that stops the run (Ctrl-C or SIGTERM to this process) at its call
+    number ``at_call``."""
+    import os
+    import signal
+
+    import bearingsim.dynamics as dyn
+
+    real = dyn.simulate_batch
+    calls = []
+
+    def batch(*a, **kw):
+        calls.append(1)
+        if len(calls) == at_call:
+            if how == "SIGTERM":
+                os.kill(os.getpid(), signal.SIGTERM)
+            raise KeyboardInterrupt
+        return real(*a, **kw)
+
+    monkeypatch.setattr(dyn, "simulate_batch", batch)
+    return calls
+
+
+@pytest.mark.parametrize("how", ["SIGINT", "SIGTERM"])
+def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, how):
+    """An interrupted run keeps its finished chunk, leaves no temporary file, says so in one
+    line; running again continues and gives a file bit-identical to an uninterrupted run."""
+    from bearingsim.dataset import Interrupted, partial_path
+
+    case, a, _, _, _ = files
+    out = tmp_path / "r.h5"
+    _interrupting(monkeypatch, 2, how)
+    with pytest.raises(Interrupted) as e:
+        make_dataset(case, out, progress=False)
+    msg = str(e.value)
+    assert "\n" not in msg and how in msg and "3 of 6 items finished" in msg and e.value.exit_code == 130
+    assert not out.exists()
+    kept = sorted(p.name for p in partial_path(out).iterdir())
+    assert kept == ["chunk_000000.npz", "spec.json"]
+    assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
+    monkeypatch.undo()
+    calls = _interrupting(monkeypatch, 99, how)
+    s = make_dataset(case, out, progress=False)
+    assert len(calls) == 1 and s.count == 6 and s.failed == 0     # only the missing chunk ran
+    assert not partial_path(out).exists()
+    assert out.read_bytes() == a.read_bytes()
+
+
+def test_partial_folder_of_another_spec_is_refused(files, tmp_path):
+    from bearingsim.dataset import partial_path
+    from bearingsim.errors import InputError
+
+    case, _, _, _, _ = files
+    out = tmp_path / "x.h5"
+    partial_path(out).mkdir()
+    (partial_path(out) / "spec.json").write_text('{"seed": 123}')
+    with pytest.raises(InputError, match="different spec"):
+        make_dataset(case, out, progress=False)
+
+
+def test_cli_interrupt_is_one_line(files, tmp_path, monkeypatch, capsys):
+    case, _, _, _, _ = files
+    p = tmp_path / "spec.toml"
+    p.write_text(case.text)
+    _interrupting(monkeypatch, 1, "SIGTERM")
+    assert main(["dataset", str(p), "-o", str(tmp_path / "c.h5")]) == 130
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "SIGTERM" in err and "run the same command again" in err
+    assert "Traceback" not in err
+
+
+def test_realism_labels(tmp_path):
+    """Slip, speed fluctuation and noise from [dynamics] are in the signals and the labels."""
+    case = spec(extra="").with_value("dynamics.slip_percent", 1.5).with_value(
+        "dynamics.noise_rms_m_s2", 0.7)
+    make_dataset(case, tmp_path / "n.h5", progress=False)
+    with h5py.File(tmp_path / "n.h5", "r") as f:
+        x, L = f["signals"][()], f["labels"][()]
+    assert np.all(L["slip_percent"] == 1.5) and np.all(L["noise_rms_m_s2"] == 0.7)
+    assert len(set(L["realism_seed"])) == 6
+    assert np.all(x[L["healthy"]].std(axis=1) == pytest.approx(0.7, rel=0.02))  # noise only
+    assert np.all(L["pass_jitter_percent"] > 0)          # each item's own slip draws
