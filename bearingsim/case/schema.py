@@ -316,10 +316,26 @@ SCHEMA: dict[str, Section] = {
                                           "", 0.05, ge=0, lt=2),
             "unbalance_kg_m": _num("rotating unbalance m_u e of the shaft (force m_u e omega^2 at shaft "
                                    "speed, along +x at t = 0)", "kg_m", 0.0, ge=0),
-            "noise_rms_m_s2": _num("white Gaussian noise added to the sensor acceleration (rms)",
-                                   "m_s2", 0.0, ge=0),
-            "seed": _int("seed of the noise generator", 0, ge=0),
-            "rtol": _num("relative tolerance of the adaptive time integration", "", 1e-5, gt=0, lt=1),
+            "resonance_frequencies_Hz": Key("numbers", "natural frequencies of several structural modes "
+                                            "in the sensor path (overrides resonance_frequency_Hz)",
+                                            "Hz", OPTIONAL),
+            "resonance_damping_ratios": Key("numbers", "damping ratio of each mode of "
+                                            "resonance_frequencies_Hz (one value: all)", "", OPTIONAL),
+            "resonance_gains": Key("numbers", "gain g_k of each mode: sensor = a_h + sum g_k z_k'' "
+                                   "(one value: all; default 1)", "", OPTIONAL),
+            "slip_percent": _num("random slip: each ball-pitch advance of the cage takes (1 + eps) times "
+                                 "its nominal time, eps ~ N(0, (slip_percent/100)^2) (the jitter of the "
+                                 "ball-pass interval)", "", 0.0, ge=0, lt=20),
+            "speed_fluctuation_percent": _num("RMS fluctuation of the shaft speed", "", 0.0, ge=0, lt=50),
+            "speed_fluctuation_bandwidth_Hz": _num("bandwidth B of the speed fluctuation (8 random-phase "
+                                                   "sinusoids, frequencies uniform in (0, B])", "Hz", 5.0, gt=0),
+            "noise_rms_m_s2": _num("Gaussian measurement noise added to the sensor acceleration (rms; the "
+                                   "CWRU normal drive-end baseline is 0.07 g = 0.686 m/s^2)", "m_s2", 0.0, ge=0),
+            "noise_band_Hz": Key("range", "band [lo, hi] of the measurement noise (white when absent)", "Hz",
+                                 OPTIONAL, ge=0),
+            "seed": _int("seed of the realism draws (slip, speed fluctuation, noise)", 0, ge=0),
+            "rtol": _num("relative tolerance of the adaptive reference integration (the default "
+                         "fixed-step integration does not use it)", "", 1e-5, gt=0, lt=1),
             "atol": _num("absolute tolerance of the time integration, on displacements in um and "
                          "velocities in mm/s", "", 1e-5, gt=0),
         },
