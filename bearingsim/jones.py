@@ -544,15 +544,16 @@ def _traced(maxit, rtol, atol):
 
 def raise_for(sol: JonesSolution, what: str = "Jones solve"):
     """Raise :class:`NotConvergedError` / :class:`InvalidStateError` for a failed solution
-    (single or batched: the first failed item is described, the count is given)."""
-    codes = np.atleast_1d(np.asarray(sol.result))
+    (single or batched, any batch shape: the first failed item in flat (C) order is described,
+    the count is given)."""
+    codes = np.ravel(np.asarray(sol.result))          # any batch shape, flattened
     bad = np.flatnonzero(codes != 0)
     if not bad.size:
         return
     k = int(bad[0])
     r = RESULTS.of(codes[k])
-    res = float(np.atleast_1d(np.asarray(sol.residual_norm))[k])
-    it = int(np.atleast_1d(np.asarray(sol.iterations))[k])
+    res = float(np.ravel(np.asarray(sol.residual_norm))[k])
+    it = int(np.ravel(np.asarray(sol.iterations))[k])
     where = f" (item {k}; {bad.size} of {codes.size} failed)" if codes.size > 1 else ""
     cls = InvalidStateError if r in (RESULTS.inverted_contact, RESULTS.equilibrium,
                                      RESULTS.beyond_bounds) else NotConvergedError
