@@ -159,7 +159,8 @@ def main():
             size = (pathlib.Path(tmp) / "full.h5").stat().st_size / 1e6
         print(f"(c) data set {args.count} x {spec.data['dataset']['duration_s']} s at "
               f"{spec.dynamics_settings()['sample_rate']:.0f} Hz (chunks of {chunk}): {el:.1f} s after "
-              f"compilation (target <= 60 s), {args.count / el:.1f} items/s, {s.failed} failed, "
+              f"compilation (target <= 60 s), {args.count / el:.1f} items/s, {s.failed} failed "
+              f"({'; '.join(s.message()) or 'none'}), "
               f"file {size:.0f} MB; peak RSS {rss_mb():.0f} MB (before {rss0:.0f} MB; target <= 2048)")
 
     if not args.no_compile:

@@ -217,8 +217,11 @@ def test_realism_is_seeded_and_labelled(cwru):
 def test_lean_ball_solver_accuracy(cwru):
     c, b, op, F, sp = cwru
     sol = bs.solve(b, op, F, cage_angle=0.0, spall=sp)
-    n, err = dyn.choose_ball_iterations(b, op, sol.displacement, sp, bs.hertz.stiffness_curve(b))
-    assert n >= 1 and err <= 1e-5
+    curve = bs.hertz.stiffness_curve(b)
+    n, err = dyn.choose_ball_iterations(b, op, sol.displacement, sp, curve)
+    assert n == 1 and err <= 1e-3
+    n, err = dyn.choose_ball_iterations(b, op, sol.displacement, sp, curve, tol=1e-9)
+    assert n == 2 and err <= 1e-9                  # quadratic convergence from the closed form
 
 
 def test_failed_initial_state_is_flagged():
