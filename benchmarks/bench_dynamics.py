@@ -123,27 +123,32 @@ def main():
     t = time.perf_counter()
     res = dyn.simulate(b, op, F, sp, p, 0.05, 48000.0, **kw)
     first = time.perf_counter() - t
-    walls = []
+    walls, cpus = [], []
     for _ in range(2):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         res = dyn.simulate(b, op, F, sp, p, args.duration, 48000.0, **kw)
         walls.append(time.perf_counter() - t)
-    jax_el = min(walls)
-    t = time.perf_counter()
+        cpus.append(time.process_time() - c)
+    jax_el, jax_cpu = min(walls), min(cpus)
+    t, c = time.perf_counter(), time.process_time()
     dyn.simulate(b, op, F, sp, p, args.duration, 48000.0, record_balls=False, **kw)
-    jax_lean = time.perf_counter() - t
+    jax_lean, lean_cpu = time.perf_counter() - t, time.process_time() - c
     rate = jax_el / args.duration
     print(f"(a) simulate (CWRU 6205, 0.021 in, 48 kHz, {res.scheme}, {res.substeps} step/sample, "
           f"{res.ball_iterations} ball Newton step(s)): {args.duration} s simulated in {jax_el:.2f} s "
-          f"with per-ball records ({jax_lean:.2f} s without): {rate:.2f} s per simulated second "
+          f"wall ({jax_cpu:.2f} s CPU) with per-ball records ({jax_lean:.2f} s wall, {lean_cpu:.2f} s "
+          f"CPU without): {rate:.2f} s per simulated second "
           f"(target <= 1), {res.num_steps / jax_el:.0f} steps/s; first call (this process, cached "
           f"compilation) {first:.1f} s")
 
+    c = time.process_time()
     sc_el, out = scipy_baseline(case, res, args.scipy_duration)
+    sc_cpu = time.process_time() - c
     sc_rate = sc_el / args.scipy_duration
     print(f"(b) scipy solve_ivp RK45 (numpy RHS, rtol = atol = 1e-5): {args.scipy_duration} s simulated "
-          f"in {sc_el:.2f} s, {out.nfev} RHS evaluations, status {out.status}: {sc_rate:.1f} s per "
-          f"simulated second; bearingsim is {sc_rate / rate:.0f} x faster (target >= 50)")
+          f"in {sc_el:.2f} s ({sc_cpu:.2f} s CPU), {out.nfev} RHS evaluations, status {out.status}: "
+          f"{sc_rate:.1f} s per simulated second; bearingsim is {sc_rate / rate:.0f} x faster in wall "
+          f"time, {sc_cpu / args.scipy_duration / (jax_cpu / args.duration):.0f} x in CPU time (target >= 50)")
 
     if args.count > 0:
         spec = load_case(_HERE.parent / "cases" / "dataset_cwru.toml")
@@ -153,12 +158,12 @@ def main():
             make_dataset(warm, pathlib.Path(tmp) / "warm.h5", progress=False)
             rss0 = rss_mb()
             full = spec.with_value("dataset.count", args.count)
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             s = make_dataset(full, pathlib.Path(tmp) / "full.h5", progress=True)
-            el = time.perf_counter() - t
+            el, cpu = time.perf_counter() - t, time.process_time() - c
             size = (pathlib.Path(tmp) / "full.h5").stat().st_size / 1e6
         print(f"(c) data set {args.count} x {spec.data['dataset']['duration_s']} s at "
-              f"{spec.dynamics_settings()['sample_rate']:.0f} Hz (chunks of {chunk}): {el:.1f} s after "
+              f"{spec.dynamics_settings()['sample_rate']:.0f} Hz (chunks of {chunk}): {el:.1f} s wall ({cpu:.1f} s CPU) after "
               f"compilation (target <= 60 s), {args.count / el:.1f} items/s, {s.failed} failed "
               f"({'; '.join(s.message()) or 'none'}), "
               f"file {size:.0f} MB; peak RSS {rss_mb():.0f} MB (before {rss0:.0f} MB; target <= 2048)")
