@@ -82,3 +82,65 @@ def test_reference_table_reproduced(label):
         txt = re.match(r"[-+]?\d+(\.\d+)?", cell).group(0)
         decimals = len(txt.split(".")[1]) if "." in txt else 0
         assert abs(value - float(txt)) <= 0.5 * 10.0**-decimals + 1e-12, (label, cell, value)
+
+
+# --------------------------------------------------------------------------- simulated vs real
+DURATION = 1.0          # s, simulated record; the real records are cut into segments this long
+SEED = 2                # not the calibration's draw (docs/calibrate_cwru.py fits with seed 1)
+SIM_CASES = {0.007: "cwru_6205_or007.toml", 0.021: "cwru_6205.toml"}
+# The two real 0.007 in records differ by x1.9 in level (130: 0.67 g at 12 kHz, 135: 1.26 g at
+# 48 kHz, both in the 2.5-5.5 kHz band); the fit on 130 cannot also be within x2 of 135.
+KNOWN_MISSES = {(0.007, 48000, "rms"): "135 is 1.9x as strong as 130 (the 12 kHz record the fit used)"}
+
+
+@pytest.fixture(scope="module")
+def real_segments():
+    from bearingsim import calibration as cal
+
+    out = {}
+    for size in SIM_CASES:
+        for fs in (12000, 48000):
+            x, fs_, shaft = cal.load_record(DATA, cal.RECORDS[(size, fs)])
+            out[size, fs] = cal.segment_metrics(x, fs_, shaft, DURATION)[0]
+    return out
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    from bearingsim import calibration as cal, realism as rl
+    from bearingsim.case import load_case
+
+    out = {}
+    for size, name in SIM_CASES.items():
+        case = load_case(REPO / "cases" / name)
+        y, fs, res, _ = rl.simulate_record(case, duration=DURATION, sample_rate=48000.0, seed=SEED,
+                                           pass_cv_max=rl.CWRU_PASS_CV_MAX,
+                                           pass_jitter_max=rl.CWRU_PASS_JITTER_MAX)
+        y = y / cal.G
+        shaft = res.frequencies["shaft_Hz"]
+        out[size, 48000] = record_metrics(y, fs, shaft, BPFO_ORDER)
+        y12, fs12 = rl.decimate_record(y, fs, 12000.0)
+        out[size, 12000] = record_metrics(y12, fs12, shaft, BPFO_ORDER)
+    return out
+
+
+def _cases():
+    from bearingsim.calibration import TARGETS
+
+    for size in SIM_CASES:
+        for fs in (12000, 48000):
+            for t in TARGETS:
+                marks = []
+                if (size, fs, t.field) in KNOWN_MISSES:
+                    marks = [pytest.mark.xfail(strict=True, reason=KNOWN_MISSES[size, fs, t.field])]
+                yield pytest.param(size, fs, t, id=f"{size}in-{fs // 1000}k-{t.field}", marks=marks)
+
+
+@pytest.mark.parametrize("size, fs, target", list(_cases()))
+def test_simulated_record_within_issue9_target(simulated, real_segments, size, fs, target):
+    """Issue 9 targets (bearingsim.calibration.TARGETS): BPFO order within 0.3 %, peak over
+    median within +-8 dB, A2/A1 and A3/A1 within +-0.15, kurtosis and RMS within a factor 2;
+    real = median over the record's 1-s segments.  The 12 kHz records (130, 234) were used by
+    the calibration, the 48 kHz ones (135, 238) were not."""
+    sim, real = getattr(simulated[size, fs], target.field), getattr(real_segments[size, fs], target.field)
+    assert target.check(sim, real), f"{target.label}: simulated {sim:.4g}, real {real:.4g}"
