@@ -48,8 +48,8 @@ import scipy.signal as ss
 #: (stage E) on the 12 kHz records 130 and 234: the factor's coefficient of variation and the
 #: delay's standard deviation (fraction of the pass interval) where the contact runs free over
 #: the whole pit (unbridged fraction 1)
-CWRU_PASS_CV_MAX = 0.02346
-CWRU_PASS_JITTER_MAX = 0.09581
+CWRU_PASS_CV_MAX = 0.02332
+CWRU_PASS_JITTER_MAX = 0.09582
 
 __all__ = [
     "CWRU_PASS_CV_MAX",
