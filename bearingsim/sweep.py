@@ -67,9 +67,16 @@ def _rectangular(spall):
 def sweep_angles(bearing, spall, start, stop, steps, resolve_edges=True):
     """Uniform grid from start to stop (inclusive) with both sides of every rectangular-spall
     edge inserted (sorted in the sweep direction)."""
+    edges = spall_edge_angles(bearing, spall, start, stop) if resolve_edges and _rectangular(spall) \
+        else np.zeros(0)
+    return _grid_with_edges(start, stop, steps, edges)
+
+
+def _grid_with_edges(start, stop, steps, edges):
+    """Uniform grid from start to stop (inclusive) with the angles EDGE_EPS either side of every
+    edge inserted, sorted in the sweep direction."""
     grid = np.linspace(float(start), float(stop), int(steps))
-    if resolve_edges and _rectangular(spall):
-        edges = spall_edge_angles(bearing, spall, start, stop)
+    if len(edges):
         extra = np.concatenate([edges - EDGE_EPS, edges + EDGE_EPS])
         lo, hi = sorted((float(start), float(stop)))
         extra = extra[(extra >= lo) & (extra <= hi)]
@@ -224,17 +231,10 @@ def defect_centre_edges(bearing, spall, start, stop, cage_angle=0.0, which=0):
 def defect_angles(bearing, spall, start, stop, steps, cage_angle=0.0, which=0, resolve_edges=True):
     """Uniform grid of defect centres from start to stop (inclusive), with both sides of every
     rectangular edge inserted (sorted in the sweep direction)."""
-    grid = np.linspace(float(start), float(stop), int(steps))
     sp = as_defects(spall)[which]
-    if resolve_edges and sp.profile == "rectangular":
-        edges = defect_centre_edges(bearing, spall, start, stop, cage_angle, which)
-        extra = np.concatenate([edges - EDGE_EPS, edges + EDGE_EPS])
-        lo, hi = sorted((float(start), float(stop)))
-        extra = extra[(extra >= lo) & (extra <= hi)]
-        grid = np.unique(np.concatenate([grid, extra]))
-        if stop < start:
-            grid = grid[::-1]
-    return grid
+    edges = defect_centre_edges(bearing, spall, start, stop, cage_angle, which) \
+        if resolve_edges and sp.profile == "rectangular" else np.zeros(0)
+    return _grid_with_edges(start, stop, steps, edges)
 
 
 def sweep_defect_angle(bearing, op, loads, spall, centers=None, *, which=0, cage_angle=0.0,
