@@ -226,7 +226,7 @@ def _run_settings(case, lab, extent, depth, center, profile, fs, params):
         if it is not None:
             its.append(it)
             subs.append(sub)
-    it = min(max(its) + 1, 4) if its else 4
+    it = dynamics.next_iterations(its)
     return it, max(subs, default=1)
 
 
