@@ -1,9 +1,11 @@
 """Labelled data sets of simulated defect-impact signals (``bearingsim dataset``).
 
 A data set spec is an ordinary case file plus a ``[dataset]`` section (see the case reference):
-``count`` item labels (speed, radial and axial load, spall length / depth / centre) are drawn
-reproducibly with ``numpy.random.default_rng(seed)``, uniform in each [min, max] range, the
-first ``round(healthy_fraction * count)`` items healthy (spall depth and length 0).  Every item
+``count`` item labels (class, speed, radial and axial load, defect length / depth / centre) are
+drawn reproducibly with ``numpy.random.default_rng(seed)``, uniform in each [min, max] range, in
+four class blocks (:data:`CLASSES`: healthy, outer race, inner race, ball; ``healthy_fraction``,
+``outer_fraction``, ``inner_fraction``, ``ball_fraction``), each fault class with its own ranges.
+All classes share one compiled program (:func:`bearingsim.dynamics.defect_slots`).  Every item
 has its own realism seed (slip, speed fluctuation, noise: the [dynamics] keys), derived from
 (seed, index), so an item's signal does not depend on which chunk it falls in.  The items are
 simulated ``chunk`` at a time with :func:`bearingsim.dynamics.simulate_batch` (the last chunk
@@ -20,8 +22,9 @@ Memory stays bounded by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` 
 
 ``/signals``  float32 (N, T) sensor acceleration, m/s^2 (chunks (1, T), gzip)
 ``/time``     float64 (T,) s
-``/labels``   compound (N,): index, healthy, speed_rpm, radial_N, axial_N, spall_length_mm,
-              spall_depth_mm, spall_center_deg, bpfo_Hz, ftf_Hz, shaft_Hz, result (0 = ok),
+``/labels``   compound (N,): index, healthy, fault_class (0-3), speed_rpm, radial_N, axial_N,
+              spall_length_mm, spall_depth_mm, spall_center_deg (the item's defect, any class),
+              bpfo_Hz, ftf_Hz, shaft_Hz, bpfi_Hz, bsf_Hz, result (0 = ok),
               realism_seed, slip_percent, pass_jitter_percent (the std of the item's drawn
               pass-interval factors), speed_fluctuation_percent, noise_rms_m_s2
 
@@ -29,8 +32,8 @@ Root attributes ``bearingsim_version``, ``case_toml``, ``seed`` (and ``count``,
 ``sample_rate_Hz``, ``duration_s``, ``balls``, ``ball_iterations``, ``substeps``, ``scheme``).
 Items whose simulation failed keep a zero signal and a result code != 0
 (:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus ``nonfinite_signal``);
-nothing written is NaN.  ``/labels`` has the attributes ``field_units`` and
-``result_messages`` (JSON objects).
+nothing written is NaN.  ``/labels`` has the attributes ``field_units``, ``result_messages``
+and ``class_names`` (JSON objects).
 """
 from __future__ import annotations
 
@@ -52,13 +55,14 @@ from .case import check_sampling
 from .case.units import from_si, to_si
 from .errors import BearingsimError, InputError, ResultCode
 
-__all__ = ["LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
+__all__ = ["CLASSES", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
            "item_seeds", "make_dataset", "partial_path", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
 LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "index": ("<i8", "-"),
     "healthy": ("?", "-"),
+    "fault_class": ("<i4", "-"),
     "speed_rpm": ("<f8", "rpm"),
     "radial_N": ("<f8", "N"),
     "axial_N": ("<f8", "N"),
@@ -68,6 +72,8 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "bpfo_Hz": ("<f8", "Hz"),
     "ftf_Hz": ("<f8", "Hz"),
     "shaft_Hz": ("<f8", "Hz"),
+    "bpfi_Hz": ("<f8", "Hz"),
+    "bsf_Hz": ("<f8", "Hz"),
     "result": ("<i4", "-"),
     "realism_seed": ("<u4", "-"),
     "slip_percent": ("<f8", "%"),
@@ -79,6 +85,12 @@ LABEL_DTYPE = np.dtype([(k, v[0]) for k, v in LABEL_FIELDS.items()])
 
 #: ranges of [dataset], in the order they are drawn
 _RANGES = ("speed_rpm", "radial_N", "axial_N", "spall_length_mm", "spall_depth_mm", "spall_center_deg")
+#: the four classes (label field ``fault_class`` = index); a fault class's defect location
+CLASSES = ("healthy", "outer", "inner", "ball")
+#: per fault class: its [dataset] ranges for (length, depth, centre) -- drawn after _RANGES, only
+#: for a class with a non-zero fraction (so outer-only specs draw exactly what they always did)
+_CLASS_RANGES = {"inner": ("inner_length_mm", "inner_depth_mm", "inner_center_deg"),
+                 "ball": ("ball_length_mm", "ball_depth_mm", "ball_spin_angle_deg")}
 
 
 def _result_members():
@@ -135,11 +147,23 @@ def _settings(case) -> dict:
     return ds
 
 
+def class_counts(ds: dict, n: int) -> dict:
+    """Items per class (dict over :data:`CLASSES`): healthy, inner and ball round(fraction x n),
+    outer the rest."""
+    nh = min(n, int(round(float(ds.get("healthy_fraction", 0.2)) * n)))
+    ni = min(n - nh, int(round(float(ds.get("inner_fraction", 0.0)) * n)))
+    nb = min(n - nh - ni, int(round(float(ds.get("ball_fraction", 0.0)) * n)))
+    return {"healthy": nh, "outer": n - nh - ni - nb, "inner": ni, "ball": nb}
+
+
 def draw_labels(case) -> np.ndarray:
     """The (N,) label table of the case's [dataset] (frequencies 0 and result 0 until simulated).
 
     Each range is drawn with ``rng.uniform(min, max, N)`` in the order of :data:`_RANGES` from
-    ``numpy.random.default_rng(seed)``; items 0 .. round(healthy_fraction N) - 1 are healthy."""
+    ``numpy.random.default_rng(seed)``, then the inner and the ball ranges (only for a class
+    that has items).  Items come in class blocks: healthy (depth and length 0), outer, inner,
+    ball (``fault_class`` 0-3, :data:`CLASSES`); ``spall_*`` hold the item's own defect (for a
+    ball pit ``spall_center_deg`` is its spin angle at t = 0, the pit on ball 0)."""
     ds = _settings(case)
     n = int(ds["count"])
     rng = np.random.default_rng(int(ds["seed"]))
@@ -148,21 +172,41 @@ def draw_labels(case) -> np.ndarray:
     for k in _RANGES:
         lo, hi = ds[k]
         lab[k] = lo if lo == hi else rng.uniform(lo, hi, n)
-    n_h = min(n, int(round(float(ds["healthy_fraction"]) * n)))
-    lab["healthy"][:n_h] = True
-    lab["spall_length_mm"][:n_h] = 0.0
-    lab["spall_depth_mm"][:n_h] = 0.0
+    counts = class_counts(ds, n)
+    start = 0
+    for c, name in enumerate(CLASSES):
+        sl = slice(start, start + counts[name])
+        start += counts[name]
+        lab["fault_class"][sl] = c
+        if name in _CLASS_RANGES and counts[name]:
+            for key, field in zip(_CLASS_RANGES[name], ("spall_length_mm", "spall_depth_mm", "spall_center_deg")):
+                lo, hi = ds[key]
+                lab[field][sl] = lo if lo == hi else rng.uniform(lo, hi, n)[sl]
+    healthy = lab["fault_class"] == 0
+    lab["healthy"] = healthy
+    lab["spall_length_mm"][healthy] = 0.0
+    lab["spall_depth_mm"][healthy] = 0.0
     return lab
 
 
-def _order(healthy: np.ndarray) -> np.ndarray:
-    """Simulation order: healthy items spread evenly among the spalled ones, so that every chunk
-    has the same shapes (a chunk of healthy items only would pad its spall edge times
-    differently and recompile)."""
-    h, s = np.flatnonzero(healthy), np.flatnonzero(~healthy)
-    key = np.concatenate([(np.arange(h.size) + 0.5) / max(h.size, 1),
-                          (np.arange(s.size) + 0.5) / max(s.size, 1)])
-    return np.concatenate([h, s])[np.argsort(key, kind="stable")]
+def _order(fault_class: np.ndarray) -> np.ndarray:
+    """Simulation order: the items of every class spread evenly over the run, so that every
+    chunk has about the same mix (and the same shapes)."""
+    idx = [np.flatnonzero(fault_class == c) for c in range(len(CLASSES))]
+    key = np.concatenate([(np.arange(i.size) + 0.5) / max(i.size, 1) for i in idx])
+    return np.concatenate(idx)[np.argsort(key, kind="stable")]
+
+
+def item_locations(lab) -> np.ndarray:
+    """Defect location of every item ("outer" for healthy ones: their depth is 0)."""
+    names = np.array(["outer", "outer", "inner", "ball"])
+    return names[lab["fault_class"]]
+
+
+def slots_of(lab) -> tuple:
+    """The defect locations the data set's program carries (those of its fault classes)."""
+    present = set(item_locations(lab[~lab["healthy"]]).tolist())
+    return tuple(L for L in ("outer", "inner", "ball") if L in present)
 
 
 class Interrupted(BearingsimError):
@@ -209,19 +253,28 @@ def item_seeds(seed, n) -> np.ndarray:
 
 def _run_settings(case, lab, extent, depth, center, profile, fs, params):
     """(ball Newton steps, substeps) for the whole data set: :func:`dynamics.batch_settings` on
-    the fastest and the most heavily loaded item (one Newton step of margin), fixed once so that
-    no chunk recompiles."""
+    the fastest and the most heavily loaded item of every class (one Newton step of margin),
+    fixed once so that no chunk recompiles."""
+    from .defect import Spall
     from .jones import load_vector
     from .kinematics import Operation
-    from .defect import Spall
 
     b = case.bearing()
     o = case.data["operation"]
+    slots = slots_of(lab)
+    loc = item_locations(lab)
+    load = lab["radial_N"] + lab["axial_N"]
+    check = set()
+    for c in range(len(CLASSES)):
+        ii = np.flatnonzero(lab["fault_class"] == c)
+        if ii.size:
+            check |= {int(ii[np.argmax(lab["speed_rpm"][ii])]), int(ii[np.argmax(load[ii])])}
     its, subs = [], []
-    for i in sorted({int(np.argmax(lab["speed_rpm"])), int(np.argmax(lab["radial_N"] + lab["axial_N"]))}):
+    for i in sorted(check):
         op = Operation.from_rpm(float(lab["speed_rpm"][i]), o["raceway_control"], True, True)
         F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
-        sp = Spall(float(center[i]), float(extent[i]), float(depth[i]), profile)
+        sp = tuple(Spall(float(center[i]) if L == loc[i] else 0.0, float(extent[i]) if L == loc[i] else 0.0,
+                         float(depth[i]) if L == loc[i] else 0.0, profile, L, 0) for L in slots)
         it, sub = dynamics.batch_settings(b, op, F, sp, case.cage_angle, fs, params, case.hertz_method)
         if it is not None:
             its.append(it)
@@ -267,16 +320,16 @@ def _chunk_file(folder: Path, k: int) -> Path:
     return folder / f"chunk_{k:06d}.npz"
 
 
-_CHUNK_FIELDS = ("result", "bpfo_Hz", "pass_jitter_percent")
+_CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent")
 
 
 def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
-                    duration, fs, seeds, it, sub):
+                    duration, fs, seeds, it, sub, loc, slots):
     m = idx.size
     pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
     res = dynamics.simulate_batch(
         b, lab["speed_rpm"][pad], loads[pad], center[pad], extent[pad], depth[pad], profile, params,
-        duration, fs, case.cage_angle, realism=realism, seeds=seeds[pad],
+        duration, fs, case.cage_angle, location=loc[pad], slots=slots, realism=realism, seeds=seeds[pad],
         control=case.data["operation"]["raceway_control"], hertz_method=case.hertz_method,
         ball_iterations=it, substeps=sub)
     a = np.asarray(res.sensor_acceleration)[:m]
@@ -284,10 +337,11 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
     finite = np.all(np.isfinite(a), axis=1)
     code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
     ok = code == 0
-    bpfo = np.asarray(res.bpfo_Hz)[:m]
     jitter = np.array([r["pass_jitter_percent"] for r in res.realism[:m]])
+    freq = {k: np.asarray(getattr(res, k))[:m] for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
     return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
-                bpfo_Hz=np.where(np.isfinite(bpfo) & ok, bpfo, 0.0), pass_jitter_percent=jitter)
+                pass_jitter_percent=jitter,
+                **{k: np.where(np.isfinite(v) & ok, v, 0.0) for k, v in freq.items()})
 
 
 def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme, chunks):
@@ -334,9 +388,14 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
             lb.attrs["units"] = "see field_units"
             lb.attrs["field_units"] = json.dumps(units)     # JSON {field: unit}
             lb.attrs["result_messages"] = json.dumps({str(c): t for c, t in result_messages().items()})
+            lb.attrs["class_names"] = json.dumps({str(c): name for c, name in enumerate(CLASSES)})
             lb.attrs["description"] = (
-                "one row per item (row i of /signals); healthy items have spall depth and length 0; "
-                "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item; result 0 = ok; "
+                "one row per item (row i of /signals); fault_class 0 healthy, 1 outer race, 2 inner "
+                "race, 3 ball (class_names); healthy items have spall depth and length 0; spall_* are "
+                "the item's defect (length on its own surface; for a ball pit spall_center_deg is "
+                "its spin angle at t = 0, 0 = in the outer contact, the pit on ball 0); "
+                "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item, bpfi_Hz and bsf_Hz "
+                "(a pit meets a raceway at 2 bsf_Hz) at its mean loaded contact angle; result 0 = ok; "
                 "realism_seed seeds the item's slip, speed fluctuation and noise")
 
 
@@ -368,7 +427,11 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     lab = draw_labels(case)
     n = lab.size
     chunk = min(int(ds["chunk"]), n)
-    extent = to_si(lab["spall_length_mm"], "mm") / float(b.outer_raceway_radius)
+    loc = item_locations(lab)
+    slots = slots_of(lab)
+    radius = {"outer": float(b.outer_raceway_radius), "inner": float(b.inner_raceway_radius),
+              "ball": 0.5 * float(b.ball_diameter)}
+    extent = to_si(lab["spall_length_mm"], "mm") / np.array([radius[L] for L in loc])
     depth = to_si(lab["spall_depth_mm"], "mm")
     center = to_si(lab["spall_center_deg"], "deg")
     loads = np.zeros((n, 5))
@@ -379,7 +442,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     lab["slip_percent"] = realism.slip_percent
     lab["speed_fluctuation_percent"] = realism.speed_fluctuation_percent
     lab["noise_rms_m_s2"] = realism.noise_rms
-    order = _order(lab["healthy"])
+    order = _order(lab["fault_class"])
     chunks = -(-n // chunk)
     folder = partial_path(path)
     spec = _spec_record(case, ds, n, T, fs, chunk)
@@ -398,7 +461,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
             for k in todo:
                 idx = order[k * chunk:(k + 1) * chunk]
                 out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
-                                      params, realism, duration, fs, seeds, it, sub)
+                                      params, realism, duration, fs, seeds, it, sub, loc, slots)
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
                 done += idx.size
                 bar.update(idx.size)

@@ -153,6 +153,20 @@ def _fixed_from(section, key):
     return default
 
 
+def _same_as(key):
+    """Default of a [dataset] range: the same section's ``key`` (already filled)."""
+    def default(sec, data):
+        v = sec.get(key)
+        return None if v is None else list(v)
+    return default
+
+
+def _rest_fraction(sec, data):
+    return max(0.0, 1.0 - sum(float(sec.get(k, d)) for k, d in (("healthy_fraction", 0.2),
+                                                                  ("inner_fraction", 0.0),
+                                                                  ("ball_fraction", 0.0))))
+
+
 def _default_sweep_stop(sec, data):
     z = data.get("bearing", {}).get("balls")
     start = sec.get("start_deg")
@@ -347,8 +361,10 @@ SCHEMA: dict[str, Section] = {
     "dataset": Section(
         "Labelled data set of simulated sensor signals (``bearingsim dataset``): ``count`` items, "
         "each a [dynamics] simulation of ``duration_s`` with its speed, loads and spall drawn "
-        "uniformly from the [min, max] ranges below (min = max fixes a value); the first "
-        "round(healthy_fraction x count) items are healthy (no spall).  The other [dynamics] "
+        "uniformly from the [min, max] ranges below (min = max fixes a value).  Four classes: "
+        "healthy, outer, inner, ball, in blocks of round(fraction x count) items in that order "
+        "(healthy first; by default all others outer); each class has its own size and position "
+        "ranges (inner_* and ball_* default to the spall_* ranges).  The other [dynamics] "
         "keys (sample rate, structure, tolerances, noise) apply to every item.",
         {
             "count": _int("number of items N", ge=1),
@@ -372,6 +388,25 @@ SCHEMA: dict[str, Section] = {
             "spall_center_deg": _range("spall centre azimuth range (0: centre of the load zone)",
                                        "deg", _fixed_from("defect", "center_deg"),
                                        "[defect.center_deg, defect.center_deg]", ge=-360, le=360),
+            "inner_fraction": _num("fraction of items with an inner-raceway spall", "", 0.0, ge=0, le=1),
+            "ball_fraction": _num("fraction of items with a pit on a ball", "", 0.0, ge=0, le=1),
+            "outer_fraction": _num("fraction of items with an outer-raceway spall", "", _rest_fraction,
+                                   ge=0, le=1, default_doc="1 - healthy_fraction - inner_fraction - "
+                                   "ball_fraction"),
+            "inner_length_mm": _range("inner-raceway spall arc length range", "mm",
+                                      _same_as("spall_length_mm"), "dataset.spall_length_mm", gt=0),
+            "inner_depth_mm": _range("inner-raceway spall depth range", "mm", _same_as("spall_depth_mm"),
+                                     "dataset.spall_depth_mm", ge=0),
+            "inner_center_deg": _range("inner spall centre azimuth range at t = 0 (it then turns with "
+                                       "the shaft)", "deg", _same_as("spall_center_deg"),
+                                       "dataset.spall_center_deg", ge=-360, le=360),
+            "ball_length_mm": _range("ball pit diameter range (arc on the ball surface)", "mm",
+                                     _same_as("spall_length_mm"), "dataset.spall_length_mm", gt=0),
+            "ball_depth_mm": _range("ball pit depth range", "mm", _same_as("spall_depth_mm"),
+                                    "dataset.spall_depth_mm", ge=0),
+            "ball_spin_angle_deg": _range("pit spin angle range at t = 0 (0: in the outer contact, 180: "
+                                          "in the inner contact); the pitted ball is ball 0",
+                                          "deg", [0.0, 360.0], ge=-360, le=360),
         },
         fill_defaults=False,
         notes=(
@@ -380,6 +415,7 @@ SCHEMA: dict[str, Section] = {
             "spall_depth_mm max < bearing.ball_diameter_mm; spall_length_mm max shorter than the "
             "ball pitch along the outer raceway",
             "radial_N and axial_N may not both allow 0 (an unloaded bearing has no solution)",
+            "healthy_fraction + outer_fraction + inner_fraction + ball_fraction = 1",
             "duration_s x dynamics.sample_rate_Hz gives at least 2 samples",
         ),
     ),

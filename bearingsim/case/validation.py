@@ -327,6 +327,26 @@ def _dataset_checks(data: dict, problems: list[str], geometry_ok: bool, raw: dic
             problems.append(f"dataset.spall_length_mm = {fmt_value(ds['spall_length_mm'])}: the longest spall "
                             f"must be shorter than the ball pitch {fmt_num(pitch)} mm along the outer raceway: "
                             "only one ball at a time may be over the spall")
+    fr = [ds.get(k) for k in ("healthy_fraction", "outer_fraction", "inner_fraction", "ball_fraction")]
+    if all(isinstance(v, (int, float)) for v in fr) and abs(sum(fr) - 1.0) > 1e-9:
+        problems.append("dataset.healthy_fraction + outer_fraction + inner_fraction + ball_fraction = "
+                        f"{fmt_num(sum(fr))}: the class fractions must add up to 1")
+    if "inner_length_mm" in ds and geometry_ok and "balls" in b and alpha0 is not None and ds.get("inner_fraction"):
+        R_i = 0.5 * (b["pitch_diameter_mm"] - b["ball_diameter_mm"] * math.cos(to_si(alpha0, "deg")))
+        pitch = 2.0 * math.pi / b["balls"] * R_i
+        if not ds["inner_length_mm"][1] < pitch:
+            problems.append(f"dataset.inner_length_mm = {fmt_value(ds['inner_length_mm'])}: the longest spall "
+                            f"must be shorter than the ball pitch {fmt_num(pitch)} mm along the inner raceway")
+    if "ball_length_mm" in ds and "ball_diameter_mm" in b and ds.get("ball_fraction"):
+        half = 0.5 * math.pi * b["ball_diameter_mm"]
+        if not ds["ball_length_mm"][1] < half:
+            problems.append(f"dataset.ball_length_mm = {fmt_value(ds['ball_length_mm'])}: the largest pit must "
+                            f"be shorter than half the ball's circumference ({fmt_num(half)} mm): it may meet "
+                            "one raceway at a time")
+    for key in ("inner_depth_mm", "ball_depth_mm"):
+        if key in ds and "ball_diameter_mm" in b and not ds[key][1] < b["ball_diameter_mm"]:
+            problems.append(f"dataset.{key} = {fmt_value(ds[key])}: the largest depth must be less than "
+                            f"bearing.ball_diameter_mm = {fmt_num(b['ball_diameter_mm'])}")
     if "radial_N" in ds and "axial_N" in ds and ds["radial_N"][0] <= 0.0 and ds["axial_N"][0] <= 0.0:
         problems.append(f"dataset.radial_N = {fmt_value(ds['radial_N'])} and dataset.axial_N = "
                         f"{fmt_value(ds['axial_N'])} both allow 0: an unloaded bearing has no solution; "

@@ -1,0 +1,51 @@
+"""Dynamic layer (MODEL.md sections 7 and 9): shaft and housing driven by the Jones forces of the
+balls as they meet a defect (outer or inner raceway spall, ball pit); the sensor path applied
+exactly afterwards.  One concept per module:
+
+=====================  ==========================================================================
+``parameters``         result codes, structural parameters, realism ingredients
+``motion``             the drawn cage / shaft motion (slip, speed fluctuation) and defect timings
+``ball_force``         the lean ball solve of the right-hand side, and its step-count check
+``model``              the shaft/housing equations, their equilibrium at t = 0, linear modes
+``integrate``          fixed-step chunked time loop (and the adaptive diffrax reference)
+``simulate``           one simulation: :func:`simulate`, :class:`DynamicsResult`
+``batch``              items in lockstep: :func:`simulate_batch` (one program for all classes)
+=====================  ==========================================================================
+"""
+# ---------------------------------------------------------------- parameters and results
+from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
+
+# ------------------------------------------------------------------------------ motion
+from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase, draw_motion,
+                     motion_at, motion_labels, seed_streams)
+
+# --------------------------------------------------------------------------- ball forces
+from .ball_force import (ITER_CHOICES, ball_errors, bearing_force, bearing_force_history,
+                         choose_ball_iterations, next_iterations)
+
+# -------------------------------------------------------------------------------- model
+from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
+
+# --------------------------------------------------------------------------- integration
+from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
+
+# ------------------------------------------------------------------------- entry points
+from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, simulate,
+                       simulate_case, spin_ratio)
+from .batch import DynamicsBatchResult, batch_settings, defect_slots, simulate_batch
+
+#: former names (outer-spall era): the times a ball meets a defect's edges / centre
+spall_edge_times = defect_edge_times
+spall_pass_times = defect_pass_times
+
+__all__ = [
+    "RESULTS", "DynamicsError", "DynamicsParameters", "Realism",
+    "Motion", "draw_motion", "motion_at", "seed_streams", "motion_labels", "defect_phase",
+    "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
+    "ITER_CHOICES", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
+    "next_iterations",
+    "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
+    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
+    "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
+    "DynamicsBatchResult", "batch_settings", "defect_slots", "simulate_batch",
+]

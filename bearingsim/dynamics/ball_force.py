@@ -1,0 +1,179 @@
+"""The balls' load on the rings in the right-hand side (its cost): a lean, transcendental-free
+ball solve, and the check that picks its Newton step count.
+
+Each ball's 2x2 Jones equilibrium (centrifugal force, gyroscopic moment, defect depths H_outer
+and H_inner) is solved from the omega = 0 closed form
+(:func:`bearingsim.balls.static_ball_position`) by ``iterations`` Newton steps with the exact
+Jacobian of the transcendental-free :func:`bearingsim.balls.ball_state` (two forward-mode
+directional derivatives, all element-wise over balls: XLA fuses them); the ball's loads on the
+ring are linearised about the last iterate (their error is second order in the last step).
+:func:`choose_ball_iterations` checks the count against :func:`bearingsim.balls.balls_at`
+(exact) over one ball pitch, with the ring displaced +-5 %.  A ball over a defect without inner
+contact is carried at the orbital speed of its undropped closed-form position.
+"""
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+from ..balls import ball_state, balls_at, groove_centre_offsets, static_ball_position
+from ..defect import advance, as_defects, contact_depths
+from ..kinematics import Operation, ball_kinematics_cs
+
+__all__ = ["bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
+           "next_iterations", "ITER_CHOICES", "ITER_TOL"]
+
+#: Newton step counts the lean ball solver is checked with (a ball dropping into a deep spall at
+#: speed, capped at 2e-3 D per step, can need 16: the demo case)
+ITER_CHOICES = (1, 2, 3, 4, 8, 16)
+#: ball loads vs balls_at, relative to the largest ball load: an error this size biases the
+#: forces by ~1e-3, an order below the fixed step's error in the signal (1-2 %)
+ITER_TOL = 1e-3
+
+
+def _zeros_like(H, psi):
+    return jnp.zeros_like(psi) if H is None else H
+
+
+def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
+    """The lean ball solve: (X1, X2, G, H, its closure for the ball state) after ``iterations``
+    steps; ``record``: also the linearised (G, H) after every step, stacked (iterations, ...)."""
+    Ho, Hi = _zeros_like(H_outer, psi), _zeros_like(H_inner, psi)
+    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    L = jnp.sqrt(A1 * A1 + A2 * A2)
+    s, c = A1 / L, A2 / L
+    # undropped closed-form orbital speed: collinear contacts along (A1, A2)
+    ws = ball_kinematics_cs(bearing, op, s, c, s, c)[2]
+    x0, _ = static_ball_position(bearing, op, A1, A2, curve, Ho, Hi)
+    X1, X2 = x0[0], x0[1]
+
+    def state(X1, X2):
+        return ball_state(bearing, op, (X1, X2), A1, A2, curve, Ho, Hi, ws)
+
+    def f(X1, X2):
+        st = state(X1, X2)
+        return st.r_axial, st.r_radial, st.ball_G, st.ball_H
+
+    one, zero = jnp.ones_like(X1), jnp.zeros_like(X1)
+    cap = 2e-3 * bearing.ball_diameter
+
+    def newton(c, _):
+        X1, X2 = c[0] + c[8], c[1] + c[9]         # the previous iterate's step
+        (r1, r2, G, H), (a11, a21, g1, h1) = jax.jvp(f, (X1, X2), (one, zero))
+        _, (a12, a22, g2, h2) = jax.jvp(f, (X1, X2), (zero, one))
+        # regularised 2x2 solve (a ball out of contact at rest: J = 0, r = 0, zero step)
+        sc = jnp.maximum(jnp.maximum(jnp.abs(a11), jnp.abs(a12)), jnp.maximum(jnp.abs(a21), jnp.abs(a22)))
+        mu = 1e-13 * sc + 1e-300
+        b11, b22 = a11 + mu, a22 + mu
+        det = b11 * b22 - a12 * a21
+        det = jnp.where(jnp.abs(det) > 1e-300, det, 1e-300)
+        d1 = -(b22 * r1 - a12 * r2) / det
+        d2 = -(b11 * r2 - a21 * r1) / det
+        n = jnp.maximum(jnp.abs(d1), jnp.abs(d2))
+        k = jnp.where(n > cap, cap / jnp.where(n > 0, n, 1.0), 1.0)
+        ok = jnp.isfinite(d1) & jnp.isfinite(d2)
+        d1, d2 = jnp.where(ok, d1 * k, 0.0), jnp.where(ok, d2 * k, 0.0)
+        out = (G + g1 * d1 + g2 * d2, H + h1 * d1 + h2 * d2) if record else None
+        return (X1, X2, G, H, g1, g2, h1, h2, d1, d2), out
+
+    init = (X1, X2) + (zero,) * 8
+    n = max(int(iterations), 1)
+    if record:
+        c, hist = lax.scan(newton, init, None, length=n)
+    else:
+        c = lax.fori_loop(0, n, lambda _, c: newton(c, None)[0], init)
+        hist = None
+    X1, X2, G, H, g1, g2, h1, h2, d1, d2 = c
+    G = G + g1 * d1 + g2 * d2
+    H = H + h1 * d1 + h2 * d2
+    return X1 + d1, X2 + d2, G, H, state, hist
+
+
+def _ring_load(G, H, psi):
+    cp, sp = jnp.cos(psi), jnp.sin(psi)
+    return jnp.stack([jnp.sum(H * cp, -1), jnp.sum(H * sp, -1), jnp.sum(G, -1)], -1)
+
+
+def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None, iterations=1,
+                  full_state=False):
+    """Load [Fx, Fy, Fz] (N) the balls carry at ring displacement q (5,) and azimuths psi (Z,),
+    each ball solved from the omega = 0 closed form by ``iterations`` Newton steps (exact
+    Jacobian), its loads linearised about the last iterate.  ``H_outer``/``H_inner``: defect
+    depths at each ball's outer / inner contact (m; None: 0).  Element-wise over balls (and any
+    leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
+    sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
+    :class:`bearingsim.balls.BallState` at the last iterate instead)."""
+    X1, X2, G, H, state, _ = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, False)
+    R = _ring_load(G, H, psi)
+    if full_state:
+        return R, state(X1, X2)
+    return R, G, H
+
+
+def bearing_force_history(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None,
+                          iterations=ITER_CHOICES[-1]):
+    """The balls' (G, H) after 1, 2, ..., ``iterations`` Newton steps, stacked on a leading axis:
+    row n-1 equals :func:`bearing_force` with ``iterations=n`` (one solve checks every count)."""
+    return _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, True)[5]
+
+
+def ball_errors(bearing, op, q, spall, curve, angles, scales, shaft_angles=None, spin_ratio=0.0):
+    """Max over cage angles x displacement scalings of the lean ball loads' error (vs
+    balls_at), relative to the largest ball load, for each of :data:`ITER_CHOICES` Newton steps.
+    ``shaft_angles`` (same shape as ``angles``, default 0) place a turning defect (inner spall:
+    centre + phi; ball pit: spin angle + spin_ratio phi)."""
+    phis = jnp.zeros_like(angles) if shaft_angles is None else shaft_angles
+    sel = jnp.asarray(ITER_CHOICES) - 1
+
+    def at(th, ph, s):
+        qq = q * s
+        psi = bearing.ball_azimuths(th)
+        Ho, Hi = contact_depths(bearing, None if spall is None else advance(spall, ph, 1.0, spin_ratio), psi)
+        ref = balls_at(bearing, op, qq, psi, curve, H_outer=Ho, H_inner=Hi)
+        scale = jnp.maximum(jnp.max(ref.Q_outer), jnp.max(ref.Q_inner)) + 1e-30
+        G, H = bearing_force_history(bearing, op, curve, qq, psi, Ho, Hi, ITER_CHOICES[-1])
+        err = jnp.maximum(jnp.max(jnp.abs(G - ref.ball_G), -1), jnp.max(jnp.abs(H - ref.ball_H), -1))
+        return err[sel] / scale
+
+    return jnp.max(jax.vmap(lambda th, ph: jax.vmap(lambda s: at(th, ph, s))(scales))(angles, phis),
+                   axis=(0, 1))
+
+
+_ball_errors_jit = eqx.filter_jit(ball_errors)
+
+
+def next_iterations(its):
+    """A batch's Newton step count: one choice above the largest checked item's (its: counts)."""
+    top = max(its, default=ITER_CHOICES[-2])
+    return ITER_CHOICES[min(ITER_CHOICES.index(top) + 1, len(ITER_CHOICES) - 1)]
+
+
+def choose_ball_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=ITER_TOL, spin_ratio=0.0):
+    """Smallest number of Newton steps (of 1, 2, 3, 4, 8, 16) whose ball loads match
+    ``balls.balls_at`` to ``tol`` (relative to the largest ball load) over one ball pitch of
+    cage angles (and with a ball over each defect: its centre and 40 % of its half-extent to
+    either side), the ring displacement q scaled by 0.95, 1, 1.05.  ``spall``: None, a Spall or
+    a tuple.  Returns (count, error); count 0 when none does."""
+    Z = bearing.n_balls
+    pitch = 2 * np.pi / Z
+    angles = list(float(theta0) + np.linspace(0.0, pitch, 12, endpoint=False))
+    phis = [0.0] * len(angles)
+    for sp in as_defects(spall):
+        if float(sp.depth) <= 0:
+            continue
+        c, e = float(sp.center), float(sp.extent)
+        for u in (0.0, -0.4 * e, 0.4 * e):
+            if sp.location == "outer":          # a ball at azimuth c + u
+                angles.append(c + u), phis.append(0.0)
+            elif sp.location == "inner":        # ball 0 at theta0, the spall turned to meet it
+                angles.append(float(theta0)), phis.append(float(theta0) - c - u)
+            elif spin_ratio > 0:                # the pit turned into the outer and the inner contact
+                for target in (0.0, np.pi):
+                    angles.append(float(theta0)), phis.append((target - c - u) / spin_ratio)
+    errs = np.asarray(_ball_errors_jit(bearing, op, jnp.asarray(q), spall, curve, jnp.asarray(angles),
+                                       jnp.array([0.95, 1.0, 1.05]), jnp.asarray(phis), float(spin_ratio)))
+    ok = np.flatnonzero(errs <= tol)
+    return (ITER_CHOICES[int(ok[0])], float(errs[ok[0]])) if ok.size else (0, float(errs.min()))

@@ -1,0 +1,178 @@
+"""The shaft/housing model (MODEL.md section 7): its right-hand side, its equilibrium at t = 0
+and its linear modes.
+
+Degrees of freedom (10 states, SI): shaft / inner-ring translations ``x_s, y_s, z_s`` (mass
+``m_s``), housing / outer-ring translations ``x_h, y_h`` (mass ``m_h``) on a support of stiffness
+``k_h`` and damping ``c_h``, and their velocities::
+
+    m_s a_s = F_ext + F_u(t) - R - C_b v_rel                        (x, y, z)
+    m_h a_h = R_xy + (C_b v_rel)_xy - k_h x_h - c_h v_h              (x, y)
+
+``R`` is the load the balls carry (:func:`bearingsim.dynamics.bearing_force`) for the relative
+ring displacement ``q_rel = [x_s - x_h, y_s - y_h, z_s, theta_x0, theta_y0]`` (tilts held at
+their quasi-static values), the balls' azimuths and the defects where they are at that instant
+(an inner spall turned with the shaft, a ball pit with its ball: :func:`bearingsim.defect.advance`
+with the run's shaft angle phi, so ``contact_depths(bearing, advance(spall, t, omega, omega_R),
+psi)`` at constant speed); ``v_rel = v_s - [v_h, 0]``; ``C_b = diag(2 zeta_b sqrt(K_ii m_s))``
+with K the quasi-static stiffness (contact damping); ``F_u = m_u e omega^2 [cos phi, sin phi,
+0]`` an optional unbalance turning with the shaft.
+
+Initial state: the model's own equilibrium at t = 0 by Newton from the quasi-static displacement
+with the quasi-static stiffness as the Jacobian (no derivative of the ball solve is compiled: the
+lean loads differ from the exact ones by <= 1e-3, so the iteration contracts by that factor per
+step).  Linear modes: the eigenvalues of the linearisation, assembled on the host from the same
+stiffness, the masses and the damping.
+"""
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+from ..defect import advance, contact_depths
+from ..kinematics import Operation
+from .ball_force import bearing_force
+from .parameters import DynamicsParameters
+
+__all__ = ["DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps", "STEP_RHO"]
+
+#: |lambda| h bound of substeps="auto"
+STEP_RHO = 0.5
+#: Newton steps of the initial equilibrium (contraction ~1e-3 per step)
+_INIT_STEPS = 6
+
+
+class DynamicModel(eqx.Module):
+    """Everything the right-hand side needs (every array may carry a batch axis under vmap).
+
+    ``defects``: a tuple of :class:`bearingsim.Spall` at t = 0 (empty: healthy; a depth-0 member
+    is inactive, so items of different classes can share one compiled program);
+    ``spin_ratio``: the pit's spin speed relative to the cage per unit shaft speed."""
+
+    bearing: object
+    op: Operation
+    defects: tuple
+    curve: object
+    loads: jnp.ndarray          # (5,) applied [Fx, Fy, Fz, Mx, My]
+    tilts: jnp.ndarray          # (2,) quasi-static tilts held constant (rad)
+    contact_damping: jnp.ndarray  # (3,) c_b in x, y, axial (N s/m)
+    stiffness: jnp.ndarray      # (3, 3) quasi-static dR/dq of the translations (N/m)
+    spin_ratio: jnp.ndarray     # omega_R / omega (-)
+    params: DynamicsParameters
+    iterations: int = eqx.field(static=True, default=1)
+
+    def depths(self, psi, phi):
+        """(H_outer, H_inner) per ball at azimuths psi and shaft angle phi (None, None: healthy)."""
+        if not self.defects:
+            return None, None
+        return contact_depths(self.bearing, advance(self.defects, phi, 1.0, self.spin_ratio), psi)
+
+    def ring_load(self, xrel, stage):
+        """[Fx, Fy, Fz] the balls carry at relative translations xrel (3,) and stage = (cage
+        angle, shaft angle, shaft speed)."""
+        th, phi, omega = stage[0], stage[1], stage[2]
+        psi = self.bearing.ball_azimuths(th)
+        q = jnp.concatenate([xrel, self.tilts])
+        op = eqx.tree_at(lambda o: o.speed, self.op, omega)
+        Ho, Hi = self.depths(psi, phi)
+        return bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations)[0]
+
+    def masses(self):
+        """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
+        p = self.params
+        return jnp.stack([p.shaft_mass] * 3 + [p.housing_mass] * 2)
+
+    def damping_matrix(self):
+        """(5, 5) linear damping: contact damping C_b on v_rel and the support damping c_h."""
+        cb, ch = self.contact_damping, self.params.housing_damping
+        C = jnp.zeros((5, 5)).at[jnp.arange(3), jnp.arange(3)].set(cb)
+        C = C.at[0, 3].set(-cb[0]).at[1, 4].set(-cb[1]).at[3, 0].set(-cb[0]).at[4, 1].set(-cb[1])
+        return C.at[3, 3].set(cb[0] + ch).at[4, 4].set(cb[1] + ch)
+
+    def forces(self, x, stage, extra_x=0.0):
+        """(5,) position- and time-dependent forces on [shaft (3), housing (2)]: applied loads,
+        unbalance, bearing load R, support spring; ``extra_x`` adds to the housing along x."""
+        p = self.params
+        ph, w = stage[1], stage[2]
+        R = self.ring_load(jnp.stack([x[0] - x[3], x[1] - x[4], x[2]]), stage)
+        Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
+        Fs = self.loads[:3] + Fu - R
+        Fh = R[:2] - p.housing_stiffness * x[3:5] + jnp.stack([extra_x, 0.0 * extra_x])
+        return jnp.concatenate([Fs, Fh])
+
+    def rhs(self, y, stage, extra_x=0.0):
+        """dy/dt for y = [x_s (3), x_h (2), v_s (3), v_h (2)]."""
+        x, v = y[:5], y[5:]
+        a = (self.forces(x, stage, extra_x) - self.damping_matrix() @ v) / self.masses()
+        return jnp.concatenate([v, a])
+
+
+def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, curve, iterations,
+                spin_ratio=0.0):
+    """DynamicModel from the quasi-static solution ``sol`` (its tilts, stiffness and the contact
+    damping built from it); ``defects``: a tuple of Spall (see :class:`DynamicModel`)."""
+    q = sol.displacement
+    Kt = sol.stiffness[..., :3, :3]
+    K = jnp.diagonal(Kt, axis1=-2, axis2=-1)
+    cb = 2.0 * params.contact_damping_ratio[..., None] * jnp.sqrt(
+        jnp.maximum(K, 0.0) * params.shaft_mass[..., None])
+    loads = jnp.asarray(loads, jnp.float64)
+    return DynamicModel(bearing, op, tuple(defects), curve, loads, q[..., 3:5], cb, Kt,
+                        jnp.asarray(spin_ratio, jnp.float64) + jnp.zeros(jnp.shape(q)[:-1]),
+                        params, int(iterations))
+
+
+def initial_state(model: DynamicModel, q_rel0, stage0):
+    """Equilibrium of the lean model at t = 0 from the quasi-static displacement (Newton on the
+    3 translations, the quasi-static stiffness as Jacobian): (y0, converged, dy/dt at y0).
+
+    The housing sits at its static support deflection and everything is at rest, so dy/dt at
+    y0 follows from the last residual r = R - F (shaft: -r plus the unbalance; housing: r_xy):
+    the ball solve is compiled once."""
+    F = model.loads[:3]
+    J = model.stiffness
+    J = J + 1e-12 * jnp.max(jnp.abs(J)) * jnp.eye(3)
+
+    def newton(_, c):
+        x = c[0] + c[2]                           # the previous iterate's step
+        r = model.ring_load(x, stage0) - F
+        dx = -jnp.linalg.solve(J, r)
+        return x, r, jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0)
+
+    x, r, _ = lax.fori_loop(0, _INIT_STEPS, newton, (q_rel0, jnp.zeros(3), jnp.zeros(3)))
+    scale = jnp.max(jnp.abs(F)) + 1.0
+    ok = jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r)) & (jnp.max(jnp.abs(r)) <= 1e-9 * scale)
+    p = model.params
+    xh = model.loads[:2] / p.housing_stiffness
+    y0 = jnp.concatenate([x[:2] + xh, x[2:3], xh, jnp.zeros(5)])
+    ph, w = stage0[1], stage0[2]
+    Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
+    acc = jnp.concatenate([(Fu - r) / p.shaft_mass, r[:2] / p.housing_mass])
+    return y0, ok, jnp.concatenate([jnp.zeros(5), acc])
+
+
+initial_state_jit = eqx.filter_jit(initial_state)
+
+
+def linear_modes(model: DynamicModel):
+    """Eigenvalues (rad/s, complex) of the shaft/housing model linearised at its equilibrium, on
+    the host: K the quasi-static translational stiffness of the bearing, k_h the support."""
+    K = np.asarray(model.stiffness, float)
+    kh = float(model.params.housing_stiffness)
+    Kf = np.zeros((5, 5))
+    Kf[:3, :3] = K
+    Kf[:3, 3:] = -K[:, :2]
+    Kf[3:, :3] = -K[:2, :]
+    Kf[3:, 3:] = K[:2, :2] + kh * np.eye(2)
+    m = np.asarray(model.masses(), float)
+    C = np.asarray(model.damping_matrix(), float)
+    A = np.block([[np.zeros((5, 5)), np.eye(5)], [-Kf / m[:, None], -C / m[:, None]]])
+    return np.linalg.eigvals(A)
+
+
+def choose_substeps(lam_max, sample_rate, rho=STEP_RHO):
+    """Smallest number of steps per sample with |lambda|_max h <= rho."""
+    return max(1, int(math.ceil(float(lam_max) / (rho * float(sample_rate)))))

@@ -1,0 +1,229 @@
+"""One dynamic simulation (MODEL.md section 7): :func:`simulate` and its
+:class:`DynamicsResult`.  The model is in :mod:`bearingsim.dynamics.model`, the ball forces in
+:mod:`~bearingsim.dynamics.ball_force`, the drawn motion in :mod:`~bearingsim.dynamics.motion`,
+the time loop in :mod:`~bearingsim.dynamics.integrate`.
+
+A quasi-static state that did not converge, or an equilibrium that cannot be found, is flagged
+in ``result`` (:class:`RESULTS`), never used silently.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import sensor as sensor_mod
+from ..defect import Spall, as_defects
+from ..errors import InputError
+from ..hertz import stiffness_curve
+from ..jones import solve
+from ..kinematics import Operation, defect_frequencies
+from .ball_force import ITER_CHOICES, bearing_force, choose_ball_iterations
+from .integrate import CHUNK, check_scheme, run_adaptive, run_fixed, time_grid
+from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
+from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at, motion_labels, seed_streams
+from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
+
+__all__ = ["DynamicsResult", "characteristic_frequencies", "spin_ratio", "slip_reference",
+           "rectangular", "ball_records", "simulate", "simulate_case"]
+
+
+def characteristic_frequencies(bearing, op, sol):
+    """Defect frequencies (Hz) at the operating point: shaft = n/60; FTF = omega_c / 2 pi from
+    the quasi-static cage speed, BPFO = Z FTF; BPFI and BSF (once per ball revolution) from the
+    MODEL.md section 8 formulas at the mean loaded contact angle (mean of (alpha_i + alpha_o)/2
+    over the balls with Q_i > 1 % of the largest).  Returns (dict, contact angle in rad)."""
+    Qi = np.asarray(sol.Q_inner)
+    loaded = Qi > 0.01 * Qi.max() if Qi.max() > 0 else np.ones_like(Qi, bool)
+    alpha = 0.5 * (np.asarray(sol.alpha_inner) + np.asarray(sol.alpha_outer))
+    a_m = float(np.mean(alpha[loaded]))
+    shaft = float(op.speed) / (2 * np.pi)
+    f = defect_frequencies(bearing, shaft, a_m)
+    ftf = float(sol.cage_speed) / (2 * np.pi)
+    return dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=float(f.bpfi),
+                bsf_Hz=float(f.bsf)), a_m
+
+
+def spin_ratio(bearing, contact_angle):
+    """omega_R / omega: a ball's spin speed relative to the cage per unit shaft speed (2 pi BSF
+    / omega, MODEL.md section 8) at the mean loaded contact angle (rad)."""
+    r = float(defect_frequencies(bearing, 1.0, contact_angle).bsf)
+    return r if np.isfinite(r) else 0.0
+
+
+def slip_reference(defects):
+    """The azimuth slip pitches start from: the first outer spall's centre (0 without one)."""
+    for sp in defects:
+        if sp.location == "outer":
+            return float(sp.center)
+    return 0.0
+
+
+def rectangular(defects):
+    """The defects with a rectangular profile (their edges are integrated exactly)."""
+    return tuple(sp for sp in defects if sp.profile == "rectangular")
+
+
+class DynamicsResult(NamedTuple):
+    """Output of :func:`simulate` (SI; T samples, Z balls)."""
+
+    time: np.ndarray                    # (T,) s
+    cage_angle: np.ndarray              # (T,) rad
+    shaft_speed: np.ndarray             # (T,) rad/s
+    ring_displacement: np.ndarray       # (T, 3) shaft relative to housing x, y, axial (m)
+    shaft_displacement: np.ndarray      # (T, 3) absolute (m)
+    housing_displacement: np.ndarray    # (T, 2) m
+    housing_acceleration: np.ndarray    # (T, 2) m/s^2
+    sensor_acceleration: np.ndarray     # (T,) m/s^2 (sensor path, plus noise)
+    noise: np.ndarray                   # (T,) m/s^2, the noise part of sensor_acceleration
+    Q_inner: np.ndarray                 # (T, Z) N (None with record_balls=False)
+    Q_outer: np.ndarray
+    alpha_inner: np.ndarray             # (T, Z) rad
+    alpha_outer: np.ndarray
+    result: int                         # RESULTS code (0 = successful)
+    num_steps: int
+    frequencies: dict                   # shaft/ftf/bpfo/bpfi/bsf in Hz (nominal speed)
+    contact_angle: float                # rad, mean loaded contact angle (quasi-static)
+    jump_times: np.ndarray              # defect entry/exit times (rectangular profile) (s)
+    pass_times: np.ndarray              # times a ball meets a defect's centre (s)
+    quasi_static: object                # JonesSolution at t = 0
+    contact_damping: np.ndarray         # (3,) N s/m
+    ball_iterations: int
+    substeps: int
+    scheme: str
+    realism: dict                       # labels of the realism draws (seed, slip draws, ...)
+
+
+
+def _ball_record(model: DynamicModel, q, psi, phi, omega, iterations):
+    def one(qq, ps, ph, w):
+        op = eqx.tree_at(lambda o: o.speed, model.op, w)
+        Ho, Hi = model.depths(ps, ph)
+        st = bearing_force(model.bearing, op, model.curve, qq, ps, Ho, Hi, iterations, full_state=True)[1]
+        return st.Q_inner, st.Q_outer, st.alpha_inner, st.alpha_outer
+
+    return jax.vmap(one)(q, psi, phi, omega)
+
+
+_ball_record_jit = eqx.filter_jit(_ball_record)
+
+
+def ball_records(model, rel, theta, phi, omega, iterations):
+    """Per-sample ball loads and angles (Q_inner, Q_outer, alpha_inner, alpha_outer), each
+    (T, Z): the lean solver at the recorded ring displacement ``rel`` (T, 3), cage angle, shaft
+    angle and speed (T,), in chunks of :data:`CHUNK` (one compilation)."""
+    T = rel.shape[0]
+    tilts = np.broadcast_to(np.asarray(model.tilts), (CHUNK, 2))
+    outs = []
+    for k in range(0, T, CHUNK):
+        n = min(CHUNK, T - k)
+        pad = lambda a: np.concatenate([a[k:k + n], np.repeat(a[k + n - 1:k + n], CHUNK - n, axis=0)])
+        q = np.concatenate([pad(rel), tilts], axis=1)
+        psi = np.asarray(model.bearing.ball_azimuths(jnp.asarray(pad(theta))[:, None]))
+        o = _ball_record_jit(model, jnp.asarray(q), jnp.asarray(psi), jnp.asarray(pad(phi)),
+                             jnp.asarray(pad(omega)), iterations)
+        outs.append([np.asarray(a)[:n] for a in o])
+    return [np.concatenate(a) for a in zip(*outs)]
+
+
+def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
+             params: DynamicsParameters | None = None, duration=0.1, sample_rate=48000.0, *,
+             theta0=0.0, realism: Realism | None = None, seed=0, hertz_method="exact",
+             scheme="newmark", substeps="auto", ball_iterations="auto", record_balls=True,
+             integrator="fixed", rtol=1e-8, atol=1e-8, sensor_coupling=False, progress=None,
+             throw=True) -> DynamicsResult:
+    """Time simulation of MODEL.md section 7 (the model: :mod:`bearingsim.dynamics.model`).
+
+    ``loads`` [Fx, Fy, Fz, Mx, My] (N, N m), ``spall`` None (healthy), a :class:`Spall` on the
+    outer or inner raceway or a ball, or a tuple of them (at t = 0: an inner spall then turns
+    with the shaft, a ball pit with its ball), ``duration`` (s), ``sample_rate`` (Hz),
+    ``theta0`` the cage angle at t = 0 (rad); ``realism`` (:class:`Realism`, seeded by
+    ``seed``): slip, speed fluctuation, noise.  ``scheme`` "newmark" | "heun" | "rk4",
+    ``substeps`` steps per sample (or "auto"), ``ball_iterations`` Newton steps per ball (or
+    "auto": :func:`choose_ball_iterations`).  ``integrator="adaptive"``: the diffrax reference
+    (``rtol``/``atol`` on displacements in um and velocities in mm/s; sensor modes in the ODE,
+    with their reaction on the housing when ``sensor_coupling``).  ``record_balls``: per-sample
+    ball loads and angles.  ``progress``: a tqdm bar (default: duration >= 1 s).  Raises
+    :class:`DynamicsError` when the run fails and ``throw`` (else check ``result.result``).
+    """
+    check_scheme(scheme)
+    if integrator not in ("fixed", "adaptive"):
+        raise InputError(f"integrator must be 'fixed' or 'adaptive', got {integrator!r}")
+    params = DynamicsParameters() if params is None else params
+    realism = Realism() if realism is None else realism
+    defects = as_defects(spall)
+    loads = jnp.asarray(loads, jnp.float64)
+    fs = float(sample_rate)
+    ts = time_grid(duration, fs)
+    T = ts.size
+    curve = stiffness_curve(bearing, hertz_method)
+    sol = solve(bearing, op, loads, cage_angle=theta0, spall=defects or None, hertz_method=hertz_method,
+                throw=False)
+    code = RESULTS.successful if int(sol.result) == 0 else RESULTS.initial_state
+    freqs, a_m = characteristic_frequencies(bearing, op, sol)
+    k_spin = spin_ratio(bearing, a_m)
+    err = 0.0
+    if ball_iterations == "auto":
+        ball_iterations, err = choose_ball_iterations(bearing, op, sol.displacement, defects, curve, theta0,
+                                                      spin_ratio=k_spin)
+        if ball_iterations == 0:
+            ball_iterations = ITER_CHOICES[-1]
+            code = code or RESULTS.ball_solver
+    model = build_model(bearing, op, loads, defects, sol, params, curve, int(ball_iterations), k_spin)
+    m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
+                    slip_reference(defects), realism)
+    st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
+    y0, ok, dy0 = initial_state_jit(model, sol.displacement[:3], st0)
+    if not bool(ok):
+        code = code or RESULTS.initial_equilibrium
+    if substeps == "auto":
+        lam = np.abs(linear_modes(model))
+        substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
+    substeps = int(substeps)
+    progress = (float(duration) >= 1.0) if progress is None else bool(progress)
+    jumps = defect_edge_times(m, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
+    if code == RESULTS.successful:
+        if integrator == "fixed":
+            y, ah, sens, nsteps = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps, False, progress)
+        else:
+            y, ah, sens, nsteps = run_adaptive(model, y0, m, ts, jumps, rtol, atol, sensor_coupling)
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(sens))):
+            code = RESULTS.nonfinite
+    else:
+        y, ah, sens, nsteps = np.zeros((T, 10)), np.zeros((T, 2)), np.zeros(T), 0
+    if throw and code != RESULTS.successful:
+        q_code = int(sol.result)
+        extra = f" (quasi-static: {sol.message()[0]})" if q_code else ""
+        raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", code.hint, code)
+    noise = np.zeros(T)
+    if realism.noise_rms > 0.0:
+        noise = sensor_mod.measurement_noise(seed_streams(seed)[3], T, realism.noise_rms, fs, realism.noise_band)
+    theta, phi, omega = motion_at(m, ts)
+    rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
+    balls = [None] * 4
+    if record_balls and code == RESULTS.successful:
+        balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
+    labels = motion_labels(m, realism)
+    labels["ball_solver_error"] = float(err)
+    return DynamicsResult(
+        time=ts, cage_angle=theta, shaft_speed=omega, ring_displacement=rel,
+        shaft_displacement=y[:, 0:3], housing_displacement=y[:, 3:5], housing_acceleration=ah,
+        sensor_acceleration=sens + noise, noise=noise, Q_inner=balls[0], Q_outer=balls[1],
+        alpha_inner=balls[2], alpha_outer=balls[3], result=int(code), num_steps=int(nsteps),
+        frequencies=freqs, contact_angle=a_m, jump_times=jumps,
+        pass_times=defect_pass_times(m, defects, ts[-1], k_spin), quasi_static=sol,
+        contact_damping=np.asarray(model.contact_damping), ball_iterations=int(ball_iterations),
+        substeps=substeps, scheme=scheme, realism=labels)
+
+
+def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
+    """:func:`simulate` with everything taken from a :class:`bearingsim.case.Case`."""
+    d = case.dynamics_settings()
+    kw.setdefault("realism", Realism.from_settings(d))
+    return simulate(case.bearing(), case.operation(), case.loads(), case.spall(),
+                    DynamicsParameters.from_settings(d), d["duration"], d["sample_rate"],
+                    theta0=case.cage_angle, seed=d.get("seed", 0), hertz_method=case.hertz_method,
+                    progress=progress, throw=throw, **kw)
