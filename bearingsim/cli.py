@@ -110,7 +110,7 @@ def _simulate(case, output, plot_dir):
     a = np.asarray(res.sensor_acceleration)
     print(f"{case.title}: {float(res.time[-1]):.4f} s simulated in {res.num_steps} steps "
           f"({res.ball_iterations or 'exact'} ball Newton steps), sensor rms {a.std():.4g} m/s^2, "
-          f"{len(res.pass_times)} spall passes")
+          f"{len(res.pass_times)} defect passes")
     print("  ".join(f"{k[:-3]} {v:.4f} Hz" for k, v in res.frequencies.items()))
     _wrote(output)
     if plot_dir:
@@ -133,13 +133,12 @@ def _spectrum(path, plot_path):
         import matplotlib.pyplot as plt
 
         from .plots_signal import plot_envelope_spectrum
+        from .signal import defect_markers
 
-        fr = analysis.frequencies
         Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
-        plt.close(plot_envelope_spectrum(analysis.spectrum, {"BPFO": fr["bpfo_Hz"], "FTF": fr["ftf_Hz"],
-                                                             "shaft": fr["shaft_Hz"]},
-                                         title=f"{path}: squared-envelope spectrum",
-                                         fmax=5.5 * fr["bpfo_Hz"], path=plot_path))
+        marks = defect_markers(analysis.markers, harmonics_of=(analysis.fault,))
+        plt.close(plot_envelope_spectrum(analysis.spectrum, marks, title=f"{path}: squared-envelope spectrum",
+                                         fmax=5.5 * analysis.fault_hz, path=plot_path))
         _wrote(plot_path)
 
 
@@ -227,7 +226,7 @@ def build_parser():
              output=True, plot=plots_into)
     _command(sub, "simulate", cmd_simulate, "dynamic simulation (shaft, housing, sensor resonator) "
              "with the Jones bearing forces; HDF5 output", output=True, plot=plots_into)
-    _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near BPFO, harmonics",
+    _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
              positional=("input", "OUT.h5", "a `bearingsim simulate` output"),
              plot=("PNG", "write the envelope spectrum plot"))
     _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "

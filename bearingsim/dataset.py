@@ -338,7 +338,8 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
     code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
     ok = code == 0
     jitter = np.array([r["pass_jitter_percent"] for r in res.realism[:m]])
-    freq = {k: np.asarray(getattr(res, k))[:m] for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
+    freq = {k: np.broadcast_to(np.asarray(getattr(res, k), float), (chunk,))[:m]
+            for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
     return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
                 pass_jitter_percent=jitter,
                 **{k: np.where(np.isfinite(v) & ok, v, 0.0) for k, v in freq.items()})

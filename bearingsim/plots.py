@@ -243,8 +243,14 @@ def plot_study(study_sols, values, parameter, unit_label="", title="", spall=Non
 
 # ------------------------------------------------------------------------------- dynamics
 def _balls_over_spall(res, bearing, spall):
-    """Balls that cross the spall during a simulation (else the three most loaded)."""
+    """Balls that meet the defect during a simulation: those crossing an outer spall, the pitted
+    ball; for an inner spall (it turns) the three whose inner load varies most; else the three
+    most loaded."""
     Qo = np.asarray(res.Q_outer)
+    if spall is not None and spall.location == "ball":
+        return np.array([spall.ball])
+    if spall is not None and spall.location == "inner":
+        return np.argsort(-np.ptp(np.asarray(res.Q_inner), axis=0))[:3]
     if spall is not None and bearing is not None:
         import jax.numpy as jnp
 
@@ -262,10 +268,12 @@ def _balls_over_spall(res, bearing, spall):
 def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=None):
     """Figures of a dynamic simulation written into ``outdir``: sensor acceleration (whole run and
     three spall passes), outer loads of the balls that pass the spall, and the envelope spectrum
-    with BPFO, FTF and shaft markers when ``spectrum`` is given.  Returns the paths written."""
+    with the defect's line (BPFO, BPFI or 2 BSF), its sidebands and harmonics when ``spectrum``
+    is given.  Returns the paths written."""
     from pathlib import Path
 
     from .plots_signal import plot_envelope_spectrum, plot_time_history
+    from .signal import defect_markers, fault_lines
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -273,33 +281,35 @@ def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=No
     a = np.asarray(res.sensor_acceleration)
     passes = np.asarray(res.pass_times)
     fr = res.frequencies
+    location = None if spall is None else spall.location
+    name, f0, lines = fault_lines(fr, location)
     written = [outdir / "sensor_acceleration.png"]
     plt.close(plot_time_history(t, a, marks=passes, title=f"{title}: sensor acceleration", path=written[-1]))
     if passes.size:
-        t0 = max(float(t[0]), float(passes[0]) - 0.5 / fr["bpfo_Hz"])
-        t1 = min(float(t[-1]), t0 + 3.0 / fr["bpfo_Hz"])
+        t0 = max(float(t[0]), float(passes[0]) - 0.5 / f0)
+        t1 = min(float(t[-1]), t0 + 3.0 / f0)
         written.append(outdir / "sensor_acceleration_zoom.png")
         plt.close(plot_time_history(t, a, marks=passes, zoom=(t0, t1), path=written[-1],
-                                    title=f"{title}: sensor acceleration (3 spall passes)"))
+                                    title=f"{title}: sensor acceleration (3 defect passes)"))
     fig, ax = plt.subplots(figsize=(10, 4), constrained_layout=True)
-    Qo = np.asarray(res.Q_outer)
+    which = "inner" if location == "inner" else "outer"
+    Q = np.asarray(res.Q_inner if which == "inner" else res.Q_outer)
     for j in _balls_over_spall(res, bearing, spall):
-        ax.plot(from_si(t, "ms"), Qo[:, j], lw=0.8, label=f"ball {j}")
+        ax.plot(from_si(t, "ms"), Q[:, j], lw=0.8, label=f"ball {j}")
     for tm in passes[:30]:
         ax.axvline(from_si(tm, "ms"), color="#d62728", ls=":", lw=0.8)
     ax.set_xlabel("time (ms)")
-    ax.set_ylabel("outer contact load Q_o (N)")
-    ax.set_title(f"{title}: outer loads of the balls that pass the spall")
+    ax.set_ylabel(f"{which} contact load Q_{which[0]} (N)")
+    ax.set_title(f"{title}: {which} loads of the balls that meet the defect")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=4)
     written.append(outdir / "ball_loads.png")
     _finish(fig, "", written[-1])
     if spectrum is not None:
         written.append(outdir / "envelope_spectrum.png")
-        plt.close(plot_envelope_spectrum(spectrum, {"BPFO": fr["bpfo_Hz"], "FTF": fr["ftf_Hz"],
-                                                    "shaft": fr["shaft_Hz"]},
+        plt.close(plot_envelope_spectrum(spectrum, defect_markers(lines, harmonics_of=(name,)),
                                          title=f"{title}: squared-envelope spectrum", path=written[-1],
-                                         fmax=5.5 * fr["bpfo_Hz"]))
+                                         fmax=5.5 * f0))
     return written
 
 

@@ -149,14 +149,15 @@ def compare_text(case, comparison) -> str:
 
 
 def spectrum_text(analysis) -> str:
-    """Sampling, band, the envelope peak near BPFO and its harmonics."""
+    """Sampling, band, the envelope peak near the defect's line (BPFO, BPFI, 2 BSF) and its
+    harmonics."""
     a = analysis
-    bpfo = a.frequencies["bpfo_Hz"]
-    rows = [(k, k * bpfo, fk, ak, (fk - k * bpfo) / (k * bpfo) * 100) for k, fk, ak in a.harmonics]
+    f0, name = a.fault_hz, a.fault
+    rows = [(k, k * f0, fk, ak, (fk - k * f0) / (k * f0) * 100) for k, fk, ak in a.harmonics]
     return "\n".join([
         f"{a.source}: {a.samples} samples at {a.sample_rate:.0f} Hz ({a.duration:.4f} s), "
         f"band {a.band[0]:.0f}-{a.band[1]:.0f} Hz, resolution {a.spectrum.resolution:.3f} Hz",
-        f"envelope peak near BPFO: {a.peak:.4f} Hz; reported bpfo_Hz {bpfo:.4f} Hz; "
-        f"relative difference {(a.peak - bpfo) / bpfo * 100:+.4f} %",
-        table(("k", "k x bpfo Hz", "measured Hz", "amplitude (m/s^2)^2", "diff %"), rows,
+        f"envelope peak near {name}: {a.peak:.4f} Hz; reported {name} {f0:.4f} Hz; "
+        f"relative difference {(a.peak - f0) / f0 * 100:+.4f} %",
+        table(("k", f"k x {name} Hz", "measured Hz", "amplitude (m/s^2)^2", "diff %"), rows,
               ("{}", "{:.3f}", "{:.3f}", "{:.4g}", "{:+.4f}"))])

@@ -36,6 +36,7 @@ __all__ = [
     "envelope_spectrum",
     "peak_frequency",
     "harmonic_peaks",
+    "fault_lines",
     "select_band",
     "defect_markers",
     "RecordMetrics",
@@ -402,6 +403,26 @@ def defect_markers(freqs: dict, n_harmonics: int = 5, harmonics_of=("BPFO",)):
         else:
             out.append((str(label), f))
     return out
+
+
+def fault_lines(frequencies: dict, location: str | None = "outer") -> tuple[str, float, dict]:
+    """(name, frequency in Hz, envelope-spectrum markers) of a defect class (MODEL.md 8, 9).
+
+    ``frequencies``: shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz (a simulation's).  ``location``
+    "outer" (or None: healthy, analysed at BPFO): BPFO with FTF and shaft; "inner": BPFI with its
+    shaft-rate sidebands BPFI -/+ f_r; "ball": 2 BSF (the pit meets a raceway twice per ball
+    turn) with its cage-rate sidebands 2 BSF -/+ FTF."""
+    fr, fc, sh = frequencies, frequencies["ftf_Hz"], frequencies["shaft_Hz"]
+    if location == "inner":
+        f = fr["bpfi_Hz"]
+        return "BPFI", f, {"BPFI": f, "BPFI-fr": f - sh, "BPFI+fr": f + sh, "shaft": sh}
+    if location == "ball":
+        f = 2.0 * fr["bsf_Hz"]
+        return "2BSF", f, {"2BSF": f, "2BSF-FTF": f - fc, "2BSF+FTF": f + fc, "FTF": fc}
+    if location not in (None, "outer"):
+        raise ValueError(f"defect location must be 'outer', 'inner', 'ball' or None, got {location!r}")
+    f = fr["bpfo_Hz"]
+    return "BPFO", f, {"BPFO": f, "FTF": fc, "shaft": sh}
 
 
 # --------------------------------------------------------------------------- record metrics

@@ -163,17 +163,21 @@ def _tolerances(maxit, rtol, atol):
 
 def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, steps=181,
           resolve_edges=True, maxit=60, rtol=1e-11, atol=1e-9,
-          hertz_method="exact", throw=False) -> JonesSolution:
+          hertz_method="exact", throw=False, centers=None, which=0) -> JonesSolution:
     """Quasi-static states over cage angles: a JonesSolution whose arrays have a leading (N,) axis.
 
     Give ``angles`` (rad) or ``start``/``stop`` (rad, default one ball pitch)/``steps``.
+    ``centers`` (N,) with ``angles``: defect ``which``'s centre at each angle too (a path in
+    (cage angle, defect angle): an inner spall or a ball pit turning while the cage turns, e.g.
+    the instants of a dynamic run).
     ``throw=False`` (default): ``result`` is per angle; ``throw=True`` raises for the
     first angle that failed (naming how many did).
     """
     if angles is None:
         stop = start + 2 * np.pi / bearing.n_balls if stop is None else stop
         angles = sweep_angles(bearing, spall, start, stop, steps, resolve_edges)
-    sol = _run(bearing, op, loads, spall, jnp.asarray(angles, dtype=jnp.float64), None, 0, maxit,
+    cs = None if centers is None else jnp.asarray(centers, dtype=jnp.float64)
+    sol = _run(bearing, op, loads, spall, jnp.asarray(angles, dtype=jnp.float64), cs, which, maxit,
                rtol, atol, hertz_method)
     if throw:
         raise_for(sol, "cage-angle sweep")

@@ -39,20 +39,6 @@ __all__ = ["solve_case", "sweep_case", "study_case", "simulate_case", "compare_c
 #: quasi-static states solved together by :func:`study_case` (the last chunk is padded)
 STUDY_CHUNK = 1024
 
-def _code_text(module, code, default_hint: str) -> tuple[str, str]:
-    """(message, hint) of a core result code: from ``module.RESULTS`` (an errors.ResultCode
-    enumeration) when the module has one, else from its ``RESULT_MESSAGES`` table."""
-    code = int(code)
-    codes = getattr(module, "RESULTS", None)
-    if codes is not None:
-        try:
-            member = codes(code)
-            return member.message, member.hint or default_hint
-        except ValueError:
-            pass
-    return getattr(module, "RESULT_MESSAGES", {}).get(code, f"result code {code}"), default_hint
-
-
 def _progress(total, desc, unit, progress):
     from tqdm import tqdm
 
@@ -234,10 +220,9 @@ def simulate_case(case, *, throw=True, progress=None, **kw):
     check_sampling(case)
     res = dynamics.simulate_case(case, progress=progress, throw=False, **kw)
     if throw and int(res.result) != 0:
-        message, hint = _code_text(dynamics, res.result, "loosen [dynamics] rtol/atol or check the "
-                                                          "structural parameters.")
-        raise NotConvergedError(f"{case.source}: the dynamic simulation failed: {message} after "
-                                f"{res.num_steps} steps", hint=hint)
+        code = dynamics.RESULTS(int(res.result))
+        raise dynamics.DynamicsError(f"{case.source}: the dynamic simulation failed: {code.message} after "
+                                     f"{res.num_steps} steps", code.hint, code)
     return res
 
 
@@ -257,8 +242,9 @@ _COMPARED = (("Q_outer", "N", 1e-6), ("Q_inner", "N", 1e-6), ("alpha_outer", "de
 
 
 def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
-    """Quasi-static sweep at the cage angles of the dynamic run (subsampled to ``max_angles``)
-    with peak values side by side.  Needs a ``[dynamics]`` section in the case file."""
+    """Quasi-static sweep at the cage angles of the dynamic run (subsampled to ``max_angles``),
+    an inner spall or a ball pit turned to where it is at each of those instants, with peak
+    values side by side.  Needs a ``[dynamics]`` section in the case file."""
     from .sweep import sweep
 
     if "dynamics" not in case.raw:
@@ -266,7 +252,12 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     res = simulate_case(case)
     th = np.asarray(res.cage_angle)
     idx = np.unique(np.linspace(0, len(th) - 1, min(len(th), max_angles)).astype(int))
-    qs = sweep(case.bearing(), case.operation(), case.loads(), case.spall(), angles=th[idx],
+    spall = case.spall()
+    centers = None          # a turning defect: its centre at each compared instant too
+    if spall is not None and spall.location in ("inner", "ball"):
+        rate = 1.0 if spall.location == "inner" else float(res.spin_ratio)
+        centers = float(spall.center) + rate * np.asarray(res.shaft_angle)[idx]
+    qs = sweep(case.bearing(), case.operation(), case.loads(), spall, angles=th[idx], centers=centers,
                hertz_method=case.hertz_method)
     _check(qs, case, "the quasi-static sweep at the dynamic run's cage angles", throw)
 
@@ -327,27 +318,35 @@ class EnvelopeAnalysis(NamedTuple):
     band: tuple
     spectrum: object          # signal.EnvelopeSpectrum
     frequencies: dict         # shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz of the simulation
-    peak: float               # envelope peak near BPFO
-    harmonics: list           # (k, measured Hz, amplitude) of k x BPFO
+    peak: float               # envelope peak near the fault frequency
+    harmonics: list           # (k, measured Hz, amplitude) of k x the fault frequency
+    fault: str = "BPFO"       # the defect's line: BPFO (outer race, healthy), BPFI (inner), 2BSF (ball)
+    fault_hz: float = 0.0     # its frequency (Hz)
+    markers: dict = None      # name -> Hz: the line, its sidebands, FTF / shaft (signal.fault_lines)
 
 
 def spectrum_file(path, *, resonance_hz=3000.0) -> EnvelopeAnalysis:
-    """Envelope analysis of a ``bearingsim simulate`` output: the peak near BPFO and its
-    harmonics.  The band is centred on the stored case's resonance (else ``resonance_hz``)."""
+    """Envelope analysis of a ``bearingsim simulate`` output: the peak near the defect's own line
+    (BPFO for an outer-race spall or a healthy bearing, BPFI for an inner-race spall, 2 BSF for a
+    ball pit: :func:`bearingsim.signal.fault_lines`) and its harmonics.  The band is centred on
+    the stored case's resonance (else ``resonance_hz``)."""
     from .io import read_simulation
-    from .signal import envelope_spectrum, harmonic_peaks, peak_frequency
+    from .signal import envelope_spectrum, fault_lines, harmonic_peaks, peak_frequency
 
     sim = read_simulation(path)
     t, a, fr = sim["time"], sim["sensor_acceleration"], sim["frequencies"]
     fs = 1.0 / float(t[1] - t[0])
+    location = None
     if sim["case"] is not None:
         resonance_hz = sim["case"].dynamics_settings()["resonance_frequency"]
+        sp = sim["case"].spall()
+        location = None if sp is None else sp.location
     band = envelope_band(fs, resonance_hz)
     es = envelope_spectrum(a, fs, band=band)
-    bpfo = fr["bpfo_Hz"]
+    name, f0, markers = fault_lines(fr, location)
     try:
-        fp = peak_frequency(es, bpfo, rel_window=0.05)
+        fp = peak_frequency(es, f0, rel_window=0.05)
     except ValueError as e:
-        raise NotConvergedError(f"{path}: no envelope peak near BPFO {bpfo:.3f} Hz: {e}") from None
+        raise NotConvergedError(f"{path}: no envelope peak near {name} {f0:.3f} Hz: {e}") from None
     return EnvelopeAnalysis(str(path), t.size, fs, float(t[-1] - t[0]) + 1.0 / fs, band, es, fr, fp,
-                            harmonic_peaks(es, bpfo, n=5, rel_window=0.03))
+                            harmonic_peaks(es, f0, n=5, rel_window=0.03), name, f0, markers)

@@ -115,6 +115,13 @@ def test_envelope_peak_at_labelled_bpfo(tmp_path):
     ("spall_length_mm = [0, 1]", "dataset.spall_length_mm", "out of range"),
     ("spall_depth_mm = [0.1, 9.0]", "dataset.spall_depth_mm", "less than bearing.ball_diameter_mm"),
     ("spall_length_mm = [0.5, 30.0]", "dataset.spall_length_mm", "ball pitch"),
+    ("inner_fraction = 0.5\nball_fraction = 0.5", "dataset.healthy_fraction", "add up to 1"),
+    ("outer_fraction = 0.5", "dataset.healthy_fraction", "add up to 1"),
+    ("ball_fraction = -0.1", "dataset.ball_fraction", "out of range"),
+    ("inner_fraction = 0.2\ninner_length_mm = [0.2, 20.0]", "dataset.inner_length_mm", "inner raceway"),
+    ("ball_fraction = 0.2\nball_length_mm = [0.2, 14.0]", "dataset.ball_length_mm", "half the ball"),
+    ("ball_fraction = 0.2\nball_depth_mm = [0.1, 9.0]", "dataset.ball_depth_mm", "less than bearing.ball_diameter_mm"),
+    ("inner_fraction = 0.2\ninner_center_deg = [0, 400]", "dataset.inner_center_deg", "out of range"),
 ])
 def test_bad_dataset_input(row, key, what):
     with pytest.raises(CaseError) as e:

@@ -344,7 +344,8 @@ def _dataset_checks(data: dict, problems: list[str], geometry_ok: bool, raw: dic
                             f"be shorter than half the ball's circumference ({fmt_num(half)} mm): it may meet "
                             "one raceway at a time")
     for key in ("inner_depth_mm", "ball_depth_mm"):
-        if key in ds and "ball_diameter_mm" in b and not ds[key][1] < b["ball_diameter_mm"]:
+        if ds.get(key[:key.index("_")] + "_fraction") and ds.get(key) != ds.get("spall_depth_mm") and \
+                key in ds and "ball_diameter_mm" in b and not ds[key][1] < b["ball_diameter_mm"]:
             problems.append(f"dataset.{key} = {fmt_value(ds[key])}: the largest depth must be less than "
                             f"bearing.ball_diameter_mm = {fmt_num(b['ball_diameter_mm'])}")
     if "radial_N" in ds and "axial_N" in ds and ds["radial_N"][0] <= 0.0 and ds["axial_N"][0] <= 0.0:

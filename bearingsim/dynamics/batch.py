@@ -41,9 +41,9 @@ class DynamicsBatchResult(NamedTuple):
     cage_speed: np.ndarray              # (N,) rad/s (quasi-static, nominal)
     bpfo_Hz: np.ndarray                 # (N,)
     realism: list                       # (N,) dicts: labels of the realism draws
-    bpfi_Hz: np.ndarray = None          # (N,)
-    bsf_Hz: np.ndarray = None           # (N,) ball spin frequency (a pit meets a race at 2 BSF)
-    shaft_Hz: np.ndarray = None         # (N,)
+    bpfi_Hz: np.ndarray = np.nan        # (N,)
+    bsf_Hz: np.ndarray = np.nan         # (N,) ball spin frequency (a pit meets a race at 2 BSF)
+    shaft_Hz: np.ndarray = np.nan       # (N,)
 
 
 def _take(tree, i):

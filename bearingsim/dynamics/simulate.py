@@ -95,6 +95,8 @@ class DynamicsResult(NamedTuple):
     substeps: int
     scheme: str
     realism: dict                       # labels of the realism draws (seed, slip draws, ...)
+    shaft_angle: np.ndarray = None      # (T,) rad (an inner spall sits at centre + shaft angle)
+    spin_ratio: float = 0.0             # omega_R / omega (a ball pit's spin angle: centre + ratio x shaft angle)
 
 
 
@@ -216,7 +218,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         frequencies=freqs, contact_angle=a_m, jump_times=jumps,
         pass_times=defect_pass_times(m, defects, ts[-1], k_spin), quasi_static=sol,
         contact_damping=np.asarray(model.contact_damping), ball_iterations=int(ball_iterations),
-        substeps=substeps, scheme=scheme, realism=labels)
+        substeps=substeps, scheme=scheme, realism=labels, shaft_angle=phi, spin_ratio=k_spin)
 
 
 def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
