@@ -44,6 +44,9 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
+from .defect import Spall
+from .errors import InputError
+
 #: pass-to-pass variability constants of the CWRU 6205 pits, fitted by docs/calibrate_cwru.py
 #: (stage E) on the 12 kHz records 130 and 234: the factor's coefficient of variation and the
 #: delay's standard deviation (fraction of the pass interval) where the contact runs free over
@@ -292,6 +295,10 @@ def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv
                  progress=progress)
     u = 0.0
     if spall is not None and (float(pass_cv_max) > 0.0 or float(pass_jitter_max) > 0.0):
+        if not isinstance(spall, Spall) or spall.location != "outer":
+            raise InputError("pass_cv_max / pass_jitter_max (pass-to-pass variability of an EDM pit "
+                             "narrower than the contact) are calibrated for one outer-race spall; "
+                             "pass 0 for inner-race and ball defects")
         c = contact_at(bearing, op, loads, float(spall.center), case.hertz_method)
         u = unbridged_fraction(float(spall.length(bearing)), c.b)
     y, fs, labels = sensor_record(r, params, float(pass_cv_max) * u, seed, fs_out,

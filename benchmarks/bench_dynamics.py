@@ -13,13 +13,21 @@
   (d) compile time of a simulation with an empty compilation cache (a fresh process; target
       <= 10 s): first call minus a second call.
 
+Issue 11 (the same targets for the new defect classes): (a) and the wall ratio of (b) are also
+printed for the inner-race (cases/cwru_6205_inner.toml) and ball (cases/cwru_6205_ball.toml)
+cases (the scipy baseline is the outer-race one: its right-hand side costs the same for every
+class), and (c) for the four-class spec cases/dataset_cwru_4class.toml (--count4 items, the
+1000-item time scaled from them).
+
 The machine (2 cores) may be shared: the numbers are indicative.
-Usage: python benchmarks/bench_dynamics.py [--duration 1.0] [--count 1000] [--no-compile]
+Usage: python benchmarks/bench_dynamics.py [--duration 1.0] [--count 1000] [--count4 160]
+       [--classes outer,inner,ball] [--no-compile]
 """
 from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 import os
 import pathlib
 import resource
@@ -100,46 +108,87 @@ print(f"{t0 - t:.2f} {t1 - t0:.2f} {t2 - t1:.2f}")
 """
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--duration", type=float, default=1.0)
-    ap.add_argument("--scipy-duration", type=float, default=0.02)
-    ap.add_argument("--count", type=int, default=1000, help="data set items (0: skip (c))")
-    ap.add_argument("--no-compile", action="store_true", help="skip (d)")
-    args = ap.parse_args()
+_DATASET_SNIPPET = """
+import json, pathlib, resource, sys, tempfile, time
+import bearingsim
+from bearingsim.case import load_case
+from bearingsim.dataset import make_dataset
+rss = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+spec = load_case(pathlib.Path(sys.argv[1]))
+count = int(sys.argv[2])
+chunk = int(spec.data["dataset"]["chunk"])
+with tempfile.TemporaryDirectory() as tmp:
+    make_dataset(spec.with_value("dataset.count", chunk), pathlib.Path(tmp) / "warm.h5", progress=False)
+    rss0 = rss()
+    t, c = time.perf_counter(), time.process_time()
+    s = make_dataset(spec.with_value("dataset.count", count), pathlib.Path(tmp) / "full.h5", progress=True)
+    el, cpu = time.perf_counter() - t, time.process_time() - c
+    size = (pathlib.Path(tmp) / "full.h5").stat().st_size / 1e6
+print(json.dumps(dict(el=el, cpu=cpu, failed=int(s.failed), messages="; ".join(s.message()), size=size,
+                      rss0=rss0, rss=rss(), chunk=chunk, duration=spec.data["dataset"]["duration_s"],
+                      fs=spec.dynamics_settings()["sample_rate"])))
+"""
 
-    import bearingsim  # noqa: F401  (x64)
-    from bearingsim import dynamics as dyn
-    from bearingsim.case import load_case
-    from bearingsim.dataset import make_dataset
 
-    print("machine: 2 shared cores; figures are indicative (other work may run at the same time)")
-    case = load_case(_HERE.parent / "cases" / "cwru_6205.toml")
-    d = case.dynamics_settings()
+def dataset_run(spec_name, count):
+    """(c): make_dataset of ``count`` items after a one-chunk compile run, in a fresh process (its
+    peak RSS is the data set's own, not this process's compiled programs)."""
+    out = subprocess.run([sys.executable, "-c", _DATASET_SNIPPET, str(_HERE.parent / "cases" / f"{spec_name}.toml"),
+                          str(count)], capture_output=False, stdout=subprocess.PIPE, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def single_item(dyn, case, duration, label):
+    """(a) for one case at 48 kHz without realism: (result, wall s per simulated s, CPU s)."""
     b, op, F, sp = case.bearing(), case.operation(), case.loads(), case.spall()
-    p = dyn.DynamicsParameters.from_settings(d)
+    p = dyn.DynamicsParameters.from_settings(case.dynamics_settings())
     kw = dict(theta0=case.cage_angle, progress=False)
-
     t = time.perf_counter()
     res = dyn.simulate(b, op, F, sp, p, 0.05, 48000.0, **kw)
     first = time.perf_counter() - t
     walls, cpus = [], []
     for _ in range(2):
         t, c = time.perf_counter(), time.process_time()
-        res = dyn.simulate(b, op, F, sp, p, args.duration, 48000.0, **kw)
+        res = dyn.simulate(b, op, F, sp, p, duration, 48000.0, **kw)
         walls.append(time.perf_counter() - t)
         cpus.append(time.process_time() - c)
     jax_el, jax_cpu = min(walls), min(cpus)
     t, c = time.perf_counter(), time.process_time()
-    dyn.simulate(b, op, F, sp, p, args.duration, 48000.0, record_balls=False, **kw)
+    dyn.simulate(b, op, F, sp, p, duration, 48000.0, record_balls=False, **kw)
     jax_lean, lean_cpu = time.perf_counter() - t, time.process_time() - c
-    rate = jax_el / args.duration
-    print(f"(a) simulate (CWRU 6205, 0.021 in, 48 kHz, {res.scheme}, {res.substeps} step/sample, "
-          f"{res.ball_iterations} ball Newton step(s)): {args.duration} s simulated in {jax_el:.2f} s "
+    rate = jax_el / duration
+    print(f"{label}, 48 kHz, {res.scheme}, {res.substeps} step/sample, "
+          f"{res.ball_iterations} ball Newton step(s)): {duration} s simulated in {jax_el:.2f} s "
           f"wall ({jax_cpu:.2f} s CPU) with per-ball records ({jax_lean:.2f} s wall, {lean_cpu:.2f} s "
           f"CPU without): {rate:.2f} s per simulated second "
           f"(target <= 1), {res.num_steps / jax_el:.0f} steps/s; first call (this process, cached "
           f"compilation) {first:.1f} s")
+    return res, rate, jax_cpu
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--duration", type=float, default=1.0)
+    ap.add_argument("--scipy-duration", type=float, default=0.02)
+    ap.add_argument("--count", type=int, default=1000, help="data set items (0: skip (c))")
+    ap.add_argument("--count4", type=int, default=160,
+                    help="four-class data set items (0: skip; the 1000-item time is scaled)")
+    ap.add_argument("--classes", default="outer,inner,ball",
+                    help="defect classes for (a) (outer always; inner, ball: issue 11)")
+    ap.add_argument("--no-compile", action="store_true", help="skip (d)")
+    args = ap.parse_args()
+
+    import bearingsim  # noqa: F401  (x64)
+    from bearingsim import dynamics as dyn
+    from bearingsim.case import load_case
+
+    print("machine: 2 shared cores; figures are indicative (other work may run at the same time)")
+    case = load_case(_HERE.parent / "cases" / "cwru_6205.toml")
+    res, rate, jax_cpu = single_item(dyn, case, args.duration, "(a) simulate (CWRU 6205, 0.021 in")
+    others = []
+    for cls in [c for c in args.classes.split(",") if c in ("inner", "ball")]:
+        oc = load_case(_HERE.parent / "cases" / f"cwru_6205_{cls}.toml")
+        others.append((cls,) + single_item(dyn, oc, args.duration, f"(a) {cls} class (cwru_6205_{cls}"))
 
     c = time.process_time()
     sc_el, out = scipy_baseline(case, res, args.scipy_duration)
@@ -149,24 +198,26 @@ def main():
           f"in {sc_el:.2f} s ({sc_cpu:.2f} s CPU), {out.nfev} RHS evaluations, status {out.status}: "
           f"{sc_rate:.1f} s per simulated second; bearingsim is {sc_rate / rate:.0f} x faster in wall "
           f"time, {sc_cpu / args.scipy_duration / (jax_cpu / args.duration):.0f} x in CPU time (target >= 50)")
+    for cls, _, r_o, cpu_o in others:
+        print(f"(b) {cls} class: bearingsim is {sc_rate / r_o:.0f} x faster than the (outer-race) scipy "
+              f"baseline in wall time, {sc_cpu / args.scipy_duration / (cpu_o / args.duration):.0f} x in "
+              f"CPU time (target >= 50)")
 
     if args.count > 0:
-        spec = load_case(_HERE.parent / "cases" / "dataset_cwru.toml")
-        chunk = int(spec.data["dataset"]["chunk"])
-        with tempfile.TemporaryDirectory() as tmp:
-            warm = spec.with_value("dataset.count", chunk)
-            make_dataset(warm, pathlib.Path(tmp) / "warm.h5", progress=False)
-            rss0 = rss_mb()
-            full = spec.with_value("dataset.count", args.count)
-            t, c = time.perf_counter(), time.process_time()
-            s = make_dataset(full, pathlib.Path(tmp) / "full.h5", progress=True)
-            el, cpu = time.perf_counter() - t, time.process_time() - c
-            size = (pathlib.Path(tmp) / "full.h5").stat().st_size / 1e6
-        print(f"(c) data set {args.count} x {spec.data['dataset']['duration_s']} s at "
-              f"{spec.dynamics_settings()['sample_rate']:.0f} Hz (chunks of {chunk}): {el:.1f} s wall ({cpu:.1f} s CPU) after "
-              f"compilation (target <= 60 s), {args.count / el:.1f} items/s, {s.failed} failed "
-              f"({'; '.join(s.message()) or 'none'}), "
-              f"file {size:.0f} MB; peak RSS {rss_mb():.0f} MB (before {rss0:.0f} MB; target <= 2048)")
+        r = dataset_run("dataset_cwru", args.count)
+        print(f"(c) data set {args.count} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of {r['chunk']}, "
+              f"a fresh process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after "
+              f"compilation (target <= 60 s), {args.count / r['el']:.1f} items/s, {r['failed']} failed "
+              f"({r['messages'] or 'none'}), "
+              f"file {r['size']:.0f} MB; peak RSS {r['rss']:.0f} MB (before {r['rss0']:.0f} MB; target <= 2048)")
+
+    if args.count4 > 0:
+        r = dataset_run("dataset_cwru_4class", args.count4)
+        print(f"(c) four-class data set {args.count4} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of "
+              f"{r['chunk']}, a fresh process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after compilation, "
+              f"{args.count4 / r['el']:.1f} items/s: 1000 items in ~{1000 * r['el'] / args.count4:.0f} s "
+              f"(target <= 60 s), {r['failed']} failed ({r['messages'] or 'none'}); peak RSS "
+              f"{r['rss']:.0f} MB (before {r['rss0']:.0f} MB; target <= 2048)")
 
     if not args.no_compile:
         with tempfile.TemporaryDirectory() as cache:

@@ -222,10 +222,15 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
 
 
 def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
-    """:func:`simulate` with everything taken from a :class:`bearingsim.case.Case`."""
+    """:func:`simulate` with everything taken from a :class:`bearingsim.case.Case`; any keyword
+    of :func:`simulate` (``duration``, ``sample_rate``, ``seed``, ``params``, ...) overrides it."""
     d = case.dynamics_settings()
     kw.setdefault("realism", Realism.from_settings(d))
-    return simulate(case.bearing(), case.operation(), case.loads(), case.spall(),
-                    DynamicsParameters.from_settings(d), d["duration"], d["sample_rate"],
-                    theta0=case.cage_angle, seed=d.get("seed", 0), hertz_method=case.hertz_method,
-                    progress=progress, throw=throw, **kw)
+    kw.setdefault("theta0", case.cage_angle)
+    kw.setdefault("seed", d.get("seed", 0))
+    kw.setdefault("hertz_method", case.hertz_method)
+    duration = kw.pop("duration", d["duration"])
+    sample_rate = kw.pop("sample_rate", d["sample_rate"])
+    params = kw.pop("params", DynamicsParameters.from_settings(d))
+    return simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration,
+                    sample_rate, progress=progress, throw=throw, **kw)
