@@ -7,7 +7,7 @@ Everything here is about one ball (vmapped over balls by the callers):
 * :func:`ball_equations` -- the ball's two equilibrium residuals and its loads on the inner ring
   (G, H, m) for a ball centre (X1, X2); free of transcendental functions (sines and cosines of
   the contact angles are ratios of the geometry, ``delta**1.5 = delta*sqrt(delta)``, K(alpha)
-  is a Chebyshev series in cos(alpha)), because the solvers evaluate it millions of times;
+  is a power series in cos(alpha)), because the solvers evaluate it millions of times;
 * :func:`ball_state` -- the full state of a ball (angles, loads, speeds) for reporting;
 * :func:`static_ball_position` -- the omega = 0 closed form (collinear contacts; exact at rest);
 * :func:`ball_newton_step`, :func:`solve_ball_fixed` (a fixed number of damped Newton steps,
@@ -33,7 +33,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .hertz import chebyshev_eval
+from .hertz import power_eval
 from .kinematics import Operation, ball_kinematics_cs
 
 __all__ = [
@@ -147,8 +147,8 @@ def _contacts(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
     si, ci = _safe_div(ui, Li), _safe_div(vi, Li)
     delta_o = Lo - (bearing.f_outer - 0.5) * D - H_outer
     delta_i = Li - (bearing.f_inner - 0.5) * D - H_inner
-    K_i = chebyshev_eval(curve.inner, ci)
-    K_o = chebyshev_eval(curve.outer, co)
+    K_i = power_eval(curve.inner_power, ci)
+    K_o = power_eval(curve.outer_power, co)
     # MODEL.md section 3: load only with overlap AND a normal that points into the raceway
     Q_i = K_i * _pow15((delta_i > 0.0) & (ci > 0.0), delta_i)
     Q_o = K_o * _pow15((delta_o > 0.0) & (co > 0.0), delta_o)
@@ -207,8 +207,8 @@ def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_i
     L = jnp.sqrt(A1 * A1 + A2 * A2)
     s, c = _safe_div(A1, L), _safe_div(A2, L)
     d_tot = L - bearing.A - H_outer - H_inner
-    K_i = chebyshev_eval(curve.inner, c)
-    K_o = chebyshev_eval(curve.outer, c)
+    K_i = power_eval(curve.inner_power, c)
+    K_o = power_eval(curve.outer_power, c)
     share_o = 1.0 / (1.0 + jnp.cbrt(K_o / K_i) ** 2)
     d_o = jnp.where(d_tot > 0.0, d_tot * share_o, 0.5 * d_tot)
     Fc = ball_kinematics_cs(bearing, op, s, c, s, c)[4]

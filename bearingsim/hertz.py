@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
+import equinox as eqx
 import numpy as np
 import jax.numpy as jnp
 from jax import lax
@@ -193,12 +194,20 @@ _CHEB_THETA = np.pi * (np.arange(_CHEB_N) + 0.5) / _CHEB_N
 _CHEB_NODES = np.cos(_CHEB_THETA)                                     # cos(alpha) at the nodes
 _CHEB_T = (2.0 / _CHEB_N) * np.cos(np.outer(np.arange(_CHEB_N), _CHEB_THETA))
 _CHEB_T[0] *= 0.5
+#: Chebyshev -> power-series coefficients (a = _CHEB_TO_POWER @ c): K's series decay ~7x per
+#: order, so the power form is as well conditioned as the Chebyshev one (Horner vs Clenshaw
+#: 2e-16, measured) and costs one multiply-add per term in the ball kernels
+_CHEB_TO_POWER = np.zeros((_CHEB_N, _CHEB_N))
+for _k in range(_CHEB_N):
+    _p = np.polynomial.chebyshev.cheb2poly(np.eye(_CHEB_N)[_k])
+    _CHEB_TO_POWER[:_p.size, _k] = _p
 
 
 class StiffnessCurve(NamedTuple):
     """Chebyshev coefficients in cos(alpha) on [-1, 1] of the inner and outer contacts' K
     (Q = K delta^1.5) and of the contact-ellipse coefficients c_a, c_b (a = c_a Q^(1/3),
-    b = c_b Q^(1/3))."""
+    b = c_b Q^(1/3)); ``inner_power``/``outer_power``: K's series as power series in
+    cos(alpha) (:func:`power_eval`, the ball kernels' form)."""
 
     inner: jnp.ndarray
     outer: jnp.ndarray
@@ -206,6 +215,8 @@ class StiffnessCurve(NamedTuple):
     inner_b: jnp.ndarray
     outer_a: jnp.ndarray
     outer_b: jnp.ndarray
+    inner_power: jnp.ndarray
+    outer_power: jnp.ndarray
 
 
 def _ellipse_coefficients(contact: HertzContact, E_eff):
@@ -213,7 +224,7 @@ def _ellipse_coefficients(contact: HertzContact, E_eff):
     return a, b
 
 
-def stiffness_curve(bearing, method: str = "exact") -> StiffnessCurve:
+def _stiffness_curve(bearing, method: str = "exact") -> StiffnessCurve:
     """The contact constants of both raceways at every angle, as Chebyshev series built once
     from the exact Hertz solution at 16 nodes (reproduce it to ~1e-13, tested)."""
     alpha = jnp.arccos(jnp.asarray(_CHEB_NODES))
@@ -223,7 +234,14 @@ def stiffness_curve(bearing, method: str = "exact") -> StiffnessCurve:
     Ep = bearing.effective_modulus
     ai, bi = _ellipse_coefficients(ci, Ep)
     ao, bo = _ellipse_coefficients(co, Ep)
-    return StiffnessCurve(T @ ci.K, T @ co.K, T @ ai, T @ bi, T @ ao, T @ bo)
+    Ki, Ko = T @ ci.K, T @ co.K
+    P = jnp.asarray(_CHEB_TO_POWER)
+    return StiffnessCurve(Ki, Ko, T @ ai, T @ bi, T @ ao, T @ bo, P @ Ki, P @ Ko)
+
+
+#: :func:`_stiffness_curve` compiled once per bearing structure and method (called eagerly, its
+#: AGM and Newton loops would compile again on every call)
+stiffness_curve = eqx.filter_jit(_stiffness_curve)
 
 
 def contact_ellipse(curve: StiffnessCurve, cos_alpha, Q, inner: bool):
@@ -236,6 +254,17 @@ def contact_ellipse(curve: StiffnessCurve, cos_alpha, Q, inner: bool):
     ab = a * b
     p = jnp.where(ab > 0, 3.0 * jnp.maximum(Q, 0.0) / (2.0 * jnp.pi * jnp.where(ab > 0, ab, 1.0)), 0.0)
     return a, b, p
+
+
+def power_eval(coeffs, cos_alpha):
+    """K at contact angle alpha from its cosine: a power series (Horner), e.g.
+    ``StiffnessCurve.inner_power``; the same values as :func:`chebyshev_eval` of the Chebyshev
+    form to ~1e-16 relative."""
+    x = jnp.clip(cos_alpha, -1.0, 1.0)
+    r = coeffs[-1] + jnp.zeros_like(x)
+    for k in range(coeffs.shape[-1] - 2, -1, -1):
+        r = r * x + coeffs[k]
+    return r
 
 
 def chebyshev_eval(coeffs, cos_alpha):

@@ -43,7 +43,7 @@ from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, gro
                     reactions_from_balls, static_ball_position)
 from .defect import Spall, contact_depths
 from .errors import InvalidStateError, NotConvergedError, ResultCode
-from .hertz import chebyshev_eval, contact_ellipse, stiffness_curve
+from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
 
 __all__ = [
@@ -129,7 +129,7 @@ def initial_displacement(bearing, loads, curve):
     Fz = loads[2]
     Fmag = jnp.abs(Fz) + jnp.hypot(loads[0], loads[1]) + 2.0 * jnp.hypot(loads[3], loads[4]) / Ri
     c0 = jnp.cos(a0)
-    Ki, Ko = chebyshev_eval(curve.inner, c0), chebyshev_eval(curve.outer, c0)
+    Ki, Ko = power_eval(curve.inner_power, c0), power_eval(curve.outer_power, c0)
     Kn = (Ki ** (-2.0 / 3.0) + Ko ** (-2.0 / 3.0)) ** (-1.5)
     d_n = (Fmag / (bearing.n_balls * Kn)) ** (2.0 / 3.0)
     sgn = jnp.where(Fz < 0.0, -1.0, 1.0)

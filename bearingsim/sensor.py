@@ -30,9 +30,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
+import scipy.linalg
 from jax import lax
 
 __all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
@@ -55,21 +55,24 @@ class SensorFilter(NamedTuple):
 
 
 def sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:
-    """FOH-exact discretisation of the modes over a step h (s).  Pure JAX (jit/vmap-able)."""
-    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
-    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
-    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
-    h = jnp.asarray(h, jnp.float64)
-
-    def one(fk, zk):
-        w = 2.0 * jnp.pi * fk
-        M = jnp.zeros((4, 4)).at[0, 1].set(1.0).at[1, 0].set(-w * w).at[1, 1].set(-2.0 * zk * w)
-        M = M.at[1, 2].set(-1.0).at[2, 3].set(1.0)
-        E = jax.scipy.linalg.expm(M * h)
-        return E[:2, :2], E[:2, 2], E[:2, 3] / h, jnp.stack([-w * w, -2.0 * zk * w])
-
-    Phi, G0, G1, C = jax.vmap(one)(f, z)
-    return SensorFilter(Phi, G0, G1, C, g, 2.0 * jnp.pi * f, z)
+    """FOH-exact discretisation of the modes over a step h (s), on the host (scipy's matrix
+    exponential of each mode's 4x4 augmented system: nothing to compile); concrete values only.
+    Leading batch axes of ``frequencies`` (with the same of ``damping_ratios``/``gains``) give
+    a batch of filters."""
+    f = np.atleast_1d(np.asarray(frequencies, np.float64))
+    z = np.broadcast_to(np.asarray(damping_ratios, np.float64), f.shape)
+    g = np.broadcast_to(np.asarray(gains, np.float64), f.shape)
+    h = float(h)
+    w = 2.0 * np.pi * f
+    Phi, G0, G1 = np.zeros(f.shape + (2, 2)), np.zeros(f.shape + (2,)), np.zeros(f.shape + (2,))
+    for idx in np.ndindex(f.shape):
+        wk, zk = w[idx], z[idx]
+        M = np.zeros((4, 4))
+        M[0, 1], M[1, 0], M[1, 1], M[1, 2], M[2, 3] = 1.0, -wk * wk, -2.0 * zk * wk, -1.0, 1.0
+        E = scipy.linalg.expm(M * h)
+        Phi[idx], G0[idx], G1[idx] = E[:2, :2], E[:2, 2], E[:2, 3] / h
+    C = np.stack([-w * w, -2.0 * z * w], axis=-1)
+    return SensorFilter(*(jnp.asarray(a) for a in (Phi, G0, G1, C, g, w, z)))
 
 
 def filter_init(flt: SensorFilter):

@@ -20,7 +20,7 @@ from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase,
                      motion_at, motion_labels, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
-from .ball_force import (ITER_CHOICES, ball_errors, bearing_force, bearing_force_history,
+from .ball_force import (ITER_CHOICES, REF_ITERATIONS, ball_errors, bearing_force, bearing_force_history,
                          choose_ball_iterations, next_iterations)
 
 # -------------------------------------------------------------------------------- model
@@ -42,7 +42,7 @@ __all__ = [
     "RESULTS", "DynamicsError", "DynamicsParameters", "Realism",
     "Motion", "draw_motion", "motion_at", "seed_streams", "motion_labels", "defect_phase",
     "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
-    "ITER_CHOICES", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
+    "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
     "next_iterations",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",

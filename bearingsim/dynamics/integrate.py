@@ -117,10 +117,6 @@ def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
 _advance_batch_jit = eqx.filter_jit(_advance_batch)
 
 
-_filter_jit = jax.jit(sensor_mod.sensor_filter)
-_filter_batch_jit = jax.jit(jax.vmap(sensor_mod.sensor_filter, in_axes=(0, 0, 0, None)))
-
-
 def _stage_grid(scheme, substeps):
     c = SCHEMES[scheme][0]
     cs = np.array(sorted(set(c) - {0.0}))
@@ -162,7 +158,7 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     h = 1.0 / (substeps * fs)
     grid = _stage_grid(scheme, substeps)
     f, z, g = model.params.modes()
-    flt = (_filter_batch_jit if batch else _filter_jit)(f, z, g, jnp.float64(h))
+    flt = sensor_mod.sensor_filter(f, z, g, h)        # (items,) modes when batched
     ms = motions if batch else [motions]
     es = edges if batch else [edges]
     carry = (y0, dy0, jnp.zeros(f.shape + (2,)))
