@@ -3,8 +3,9 @@ TOML, the kind of a value, "did you mean" suggestions."""
 from __future__ import annotations
 
 import difflib
-import json
 import math
+
+from .toml_writer import toml_value
 
 __all__ = ["fmt_num", "fmt_value", "kind_of", "suggest"]
 
@@ -19,20 +20,14 @@ def fmt_num(x) -> str:
 
 
 def fmt_value(v) -> str:
-    """A value as written in TOML (for messages)."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(fmt_value(e) for e in v) + "]"
+    """A value as written in TOML (for messages; a table is "a table", anything TOML cannot
+    hold its repr)."""
     if isinstance(v, dict):
         return "a table"
-    return repr(v)
+    try:
+        return toml_value(v)
+    except TypeError:
+        return repr(v)
 
 
 _KINDS = ((bool, "a boolean"), (int, "an integer"), (float, "a float"), (str, "a string"), (list, "an array"),
