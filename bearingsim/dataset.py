@@ -253,8 +253,8 @@ def item_seeds(seed, n) -> np.ndarray:
 
 def _run_settings(case, lab, extent, depth, center, profile, fs, params):
     """(ball Newton steps, substeps) for the whole data set: :func:`dynamics.batch_settings` on
-    the fastest and the most heavily loaded item of every class (one Newton step of margin),
-    fixed once so that no chunk recompiles."""
+    the extreme items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and
+    least loaded, largest defect), the largest count, fixed once so that no chunk recompiles."""
     from .defect import Spall
     from .jones import load_vector
     from .kinematics import Operation
@@ -264,13 +264,10 @@ def _run_settings(case, lab, extent, depth, center, profile, fs, params):
     slots = slots_of(lab)
     loc = item_locations(lab)
     load = lab["radial_N"] + lab["axial_N"]
-    check = set()
-    for c in range(len(CLASSES)):
-        ii = np.flatnonzero(lab["fault_class"] == c)
-        if ii.size:
-            check |= {int(ii[np.argmax(lab["speed_rpm"][ii])]), int(ii[np.argmax(load[ii])])}
+    size = np.asarray(extent, float) * np.asarray(depth, float)
+    check = dynamics.extreme_items(lab["fault_class"], lab["speed_rpm"], load, size)
     its, subs = [], []
-    for i in sorted(check):
+    for i in check:
         op = Operation.from_rpm(float(lab["speed_rpm"][i]), o["raceway_control"], True, True)
         F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
         sp = tuple(Spall(float(center[i]) if L == loc[i] else 0.0, float(extent[i]) if L == loc[i] else 0.0,

@@ -165,9 +165,10 @@ _ball_errors_jit = eqx.filter_jit(ball_errors)
 
 
 def next_iterations(its):
-    """A batch's Newton step count: one choice above the largest checked item's (its: counts)."""
-    top = max(its, default=ITER_CHOICES[-2])
-    return ITER_CHOICES[min(ITER_CHOICES.index(top) + 1, len(ITER_CHOICES) - 1)]
+    """A batch's Newton step count: the largest of the checked items' counts (its), or the
+    largest choice when none was checked.  The items checked are the extremes of the batch
+    (:func:`bearingsim.dynamics.extreme_items`), so every item lies inside what was checked."""
+    return max(its, default=ITER_CHOICES[-1])
 
 
 def choose_ball_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=ITER_TOL, spin_ratio=0.0):

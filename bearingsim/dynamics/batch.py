@@ -27,7 +27,7 @@ from .motion import defect_edge_times, draw_motion, motion_at, motion_labels, se
 from .parameters import RESULTS, DynamicsParameters, Realism
 from .simulate import characteristic_frequencies, rectangular, slip_reference, spin_ratio
 
-__all__ = ["DynamicsBatchResult", "defect_slots", "batch_settings", "simulate_batch"]
+__all__ = ["DynamicsBatchResult", "defect_slots", "extreme_items", "batch_settings", "simulate_batch"]
 
 
 class DynamicsBatchResult(NamedTuple):
@@ -66,6 +66,19 @@ def defect_slots(location, center, extent, depth, profile="rectangular", slots=N
         out.append(Spall(jnp.where(mine, center, 0.0), jnp.where(mine, extent, 0.0),
                          jnp.where(mine, depth, 0.0), profile, L, 0))
     return tuple(out)
+
+
+def extreme_items(groups, speed, load, size):
+    """Indices of the items that bound a batch, per group (defect class or location): the
+    fastest and the slowest, the most and the least loaded, the largest defect.  The ball Newton
+    step count and the substeps checked on them hold for every item between them."""
+    groups, speed, load, size = (np.asarray(a) for a in (groups, speed, load, size))
+    out = set()
+    for g in np.unique(groups):
+        ii = np.flatnonzero(groups == g)
+        for v in (speed, -speed, load, -load, size):
+            out.add(int(ii[np.argmax(v[ii])]))
+    return sorted(out)
 
 
 def _qs_batch(bearing, op, loads, theta0, defects, hertz_method, speed_steps):
@@ -115,8 +128,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     chunk shares one program); ``params`` fields may be scalars or (N,) ((N, M) for the modes);
     ``seeds`` (N,) the items' realism seeds (default 0..N-1).  Never raises for an item:
     ``result`` is per item.  ``ball_iterations``/``substeps`` None: :func:`batch_settings` on
-    the fastest and the most heavily loaded item of each location (one more Newton step of
-    margin)."""
+    the extreme items of each location (:func:`extreme_items`), the largest count."""
     check_scheme(scheme)
     realism = Realism() if realism is None else realism
     loads = jnp.asarray(loads, jnp.float64)
@@ -140,11 +152,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     if ball_iterations is None or substeps is None:
         its, subs = [], []
         absF = np.abs(np.asarray(loads)).sum(1)
-        check = set()
-        for L in set(loc.tolist()):
-            ii = np.flatnonzero(loc == L)
-            check |= {int(ii[np.argmax(speed[ii])]), int(ii[np.argmax(absF[ii])])}
-        for i in sorted(check):
+        for i in extreme_items(loc, speed, absF, np.asarray(spall_extent) * np.asarray(spall_depth) + np.zeros(n)):
             it_i, s_i = batch_settings(bearing, _take(op, i), loads[i], _take(defects, i), float(th[i]), fs,
                                        _take(params, i), hertz_method)
             if it_i is not None:
@@ -165,8 +173,8 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
             return a.at[idx].set(jnp.where(mk, r, a[idx]))
 
         sols = jax.tree_util.tree_map(merge, sols, retry)
-    freqs = [characteristic_frequencies(bearing, _take(op, i), _take(sols, i)) for i in range(n)]
-    k_spin = np.array([spin_ratio(bearing, a) for _, a in freqs])
+    freqs, a_m = characteristic_frequencies(bearing, op, sols)
+    k_spin = spin_ratio(bearing, a_m)
     curve = stiffness_curve(bearing, hertz_method)
     bearing_b = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)), bearing)
     curve_b = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)), curve)
@@ -174,7 +182,8 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
                         jnp.asarray(k_spin))
     omega_c = np.asarray(sols.cage_speed)
     okc = np.isfinite(omega_c) & (omega_c > 0)
-    items = [_take(defects, i) for i in range(n)]
+    host = jax.tree_util.tree_map(np.asarray, defects)      # per-item defects, host copies
+    items = [_take(host, i) for i in range(n)]
     motions = [draw_motion(int(seeds[i]), bearing.n_balls, float(th[i]), float(omega_c[i]) if okc[i] else 0.0,
                            float(op.speed[i]), ts[-1], slip_reference(items[i]), realism) for i in range(n)]
     st0 = jnp.asarray(np.stack([np.stack(motion_at(m, np.zeros(1)), -1)[0] for m in motions]))
@@ -195,7 +204,6 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
         labels.append(motion_labels(m, realism))
     rel = np.stack([y[..., 0] - y[..., 3], y[..., 1] - y[..., 4], y[..., 2]], axis=-1)
     wc = np.where(okc, omega_c, np.nan)
-    col = lambda key: np.array([fr[key] for fr, _ in freqs])
     return DynamicsBatchResult(ts, sens, rel, code.astype(np.int32), np.full(n, nsteps), wc,
-                               bearing.n_balls * wc / (2 * np.pi), labels, col("bpfi_Hz"), col("bsf_Hz"),
-                               col("shaft_Hz"))
+                               bearing.n_balls * wc / (2 * np.pi), labels, freqs["bpfi_Hz"], freqs["bsf_Hz"],
+                               freqs["shaft_Hz"])

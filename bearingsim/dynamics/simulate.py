@@ -35,23 +35,29 @@ def characteristic_frequencies(bearing, op, sol):
     """Defect frequencies (Hz) at the operating point: shaft = n/60; FTF = omega_c / 2 pi from
     the quasi-static cage speed, BPFO = Z FTF; BPFI and BSF (once per ball revolution) from the
     MODEL.md section 8 formulas at the mean loaded contact angle (mean of (alpha_i + alpha_o)/2
-    over the balls with Q_i > 1 % of the largest).  Returns (dict, contact angle in rad)."""
+    over the balls with Q_i > 1 % of the largest).  Returns (dict, contact angle in rad): floats
+    for one state, arrays for a batch (``sol`` and ``op.speed`` with a leading item axis)."""
     Qi = np.asarray(sol.Q_inner)
-    loaded = Qi > 0.01 * Qi.max() if Qi.max() > 0 else np.ones_like(Qi, bool)
+    top = Qi.max(axis=-1, keepdims=True)
+    loaded = np.where(top > 0, Qi > 0.01 * top, True)
     alpha = 0.5 * (np.asarray(sol.alpha_inner) + np.asarray(sol.alpha_outer))
-    a_m = float(np.mean(alpha[loaded]))
-    shaft = float(op.speed) / (2 * np.pi)
+    a_m = np.sum(alpha * loaded, axis=-1) / np.sum(loaded, axis=-1)
+    shaft = np.asarray(op.speed, float) / (2 * np.pi)
     f = defect_frequencies(bearing, shaft, a_m)
-    ftf = float(sol.cage_speed) / (2 * np.pi)
-    return dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=float(f.bpfi),
-                bsf_Hz=float(f.bsf)), a_m
+    ftf = np.asarray(sol.cage_speed, float) / (2 * np.pi)
+    out = dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=np.asarray(f.bpfi),
+               bsf_Hz=np.asarray(f.bsf))
+    if np.ndim(a_m) == 0:
+        return {k: float(v) for k, v in out.items()}, float(a_m)
+    return out, a_m
 
 
 def spin_ratio(bearing, contact_angle):
     """omega_R / omega: a ball's spin speed relative to the cage per unit shaft speed (2 pi BSF
-    / omega, MODEL.md section 8) at the mean loaded contact angle (rad)."""
-    r = float(defect_frequencies(bearing, 1.0, contact_angle).bsf)
-    return r if np.isfinite(r) else 0.0
+    / omega, MODEL.md section 8) at the mean loaded contact angle (rad; a float or an array)."""
+    r = np.asarray(defect_frequencies(bearing, 1.0, contact_angle).bsf, float)
+    r = np.where(np.isfinite(r), r, 0.0)
+    return float(r) if r.ndim == 0 else r
 
 
 def slip_reference(defects):
