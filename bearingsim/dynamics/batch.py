@@ -187,10 +187,10 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     motions = [draw_motion(int(seeds[i]), bearing.n_balls, float(th[i]), float(omega_c[i]) if okc[i] else 0.0,
                            float(op.speed[i]), ts[-1], slip_reference(items[i]), realism) for i in range(n)]
     st0 = jnp.asarray(np.stack([np.stack(motion_at(m, np.zeros(1)), -1)[0] for m in motions]))
-    y0, ok, dy0 = _init_batch_jit(model, sols.displacement[:, :3], st0)
+    y0, ok, dy0, _ = _init_batch_jit(model, sols.displacement[:, :3], st0)
     edges = [defect_edge_times(mm, rectangular(items[i]), ts[-1] + 1.0 / fs, k_spin[i])
              for i, mm in enumerate(motions)]
-    y, ah, sens, nsteps = run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, int(substeps), True, False)
+    y, ah, sens, nsteps, _ = run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, int(substeps), True, False)
     code = np.where(np.asarray(sols.result) != 0, int(RESULTS.initial_state),
                     np.where(~np.asarray(ok), int(RESULTS.initial_equilibrium), int(RESULTS.successful)))
     finite = np.all(np.isfinite(y), axis=(1, 2)) & np.all(np.isfinite(sens), axis=1)

@@ -56,11 +56,14 @@ def check_scheme(scheme):
         raise InputError(f"scheme must be one of {sorted(SCHEMES)}, got {scheme!r}")
 
 
-def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str):
+def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, record: bool = False):
     """Advance over a chunk: ``stages`` (N, S, n_c, 3) motion at the non-zero stage points of
     every step, ``jumps`` (N, S) the fraction of the step at which a ball crosses a rectangular
-    spall edge (-1: none).  carry = (y, dy, s): state, its derivative, sensor-mode states.
-    Returns the new carry and per sample (y, a_h (2), sensor) at the sample instant."""
+    spall edge (-1: none).  carry = (y, dy, s, rec): state, its derivative, sensor-mode states,
+    the balls' record (4, Z) at y (Q_inner, Q_outer, alpha_inner, alpha_outer; only with
+    ``record``: Newmark takes it from the step's own force evaluation, the Runge-Kutta schemes
+    evaluate it once more).  Returns the new carry and per sample (y, a_h (2), sensor[, rec])
+    at the sample instant."""
     c, a, b = SCHEMES[scheme]
     cs = sorted(set(c) - {0.0})
     idx = [None if ci == 0.0 else cs.index(ci) for ci in c]
@@ -71,7 +74,8 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str):
         P = jnp.linalg.inv(jnp.eye(5) + 0.5 * h * MC)
 
     def step(carry, st, th):
-        y, k1, s = carry
+        y, k1, s = carry[:3]
+        rec = None
         if scheme == "newmark":
             # x: central difference; v: the damping trapezoidal (implicit, linear), the forces
             # weighted by where they jump (a step at theta h: weights theta, 1 - theta; none:
@@ -80,7 +84,9 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str):
             F0 = acc + MC @ v
             wgt = jnp.where(th >= 0.0, th, 0.5)
             x1 = x + h * v + 0.5 * h * h * acc
-            F1 = model.forces(x1, st[last]) / mass
+            F1 = model.forces(x1, st[last], full_state=record)
+            F1, rec = F1 if record else (F1, None)
+            F1 = F1 / mass
             v1 = P @ (v - 0.5 * h * (MC @ v) + h * (wgt * F0 + (1.0 - wgt) * F1))
             acc1 = F1 - MC @ v1
             y1, k1n = jnp.concatenate([x1, v1]), jnp.concatenate([v1, acc1])
@@ -93,12 +99,14 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str):
             y1 = y + h * sum(bi * ki for bi, ki in zip(b, ks))
             k1n = model.rhs(y1, st[last])
             s = sensor_mod.filter_update(flt, s, k1[8], k1n[8])
-        return (y1, k1n, s), None
+            if record:
+                rec = model.forces(y1[:5], st[last], full_state=True)[1]
+        return ((y1, k1n, s, rec) if record else (y1, k1n, s)), None
 
     def sample(carry, xs):
         st_sample, th_sample = xs
-        y, k1, s = carry
-        out = (y, k1[8:10], sensor_mod.filter_output(flt, s, k1[8]))
+        y, k1, s = carry[:3]
+        out = (y, k1[8:10], sensor_mod.filter_output(flt, s, k1[8])) + ((carry[3],) if record else ())
         for j in range(st_sample.shape[0]):         # substeps: a static, small count
             carry, _ = step(carry, st_sample[j], th_sample[j])
         return carry, out
@@ -151,17 +159,19 @@ def time_grid(duration, sample_rate):
     return np.arange(n) / float(sample_rate)
 
 
-def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, progress):
+def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, progress, rec0=None):
     """Chunked fixed-step integration of one model (batch=False) or a batch (motions and the
     rectangular spall edge times ``edges`` lists).  Returns host arrays y (.., T, 10),
-    a_h (.., T, 2), sensor (.., T) and the number of steps."""
+    a_h (.., T, 2), sensor (.., T), the number of steps and, with the balls' record at t = 0
+    ``rec0`` (4, Z) (one model only), the per-sample records (T, 4, Z) (else None)."""
     h = 1.0 / (substeps * fs)
     grid = _stage_grid(scheme, substeps)
     f, z, g = model.params.modes()
     flt = sensor_mod.sensor_filter(f, z, g, h)        # (items,) modes when batched
     ms = motions if batch else [motions]
     es = edges if batch else [edges]
-    carry = (y0, dy0, jnp.zeros(f.shape + (2,)))
+    record = rec0 is not None and not batch
+    carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ())
     outs = []
     bar = None
     if progress:
@@ -175,10 +185,10 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
                                             jnp.full(len(ms), h), flt, scheme)
         else:
             carry, out = _advance_jit(model, carry, jnp.asarray(stg[0]), jnp.asarray(jmp[0]),
-                                      jnp.float64(h), flt, scheme)
+                                      jnp.float64(h), flt, scheme, record)
         n = min(CHUNK, T - k0)
-        outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[..., :n, :] if a.ndim > (1 + batch)
-                                           else np.asarray(a)[..., :n], out))
+        # the sample axis is the first of an item's outputs
+        outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n] if batch else np.asarray(a)[:n], out))
         if bar is not None:
             bar.update(n)
     if bar is not None:
@@ -186,7 +196,8 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     y = np.concatenate([o[0] for o in outs], axis=-2)
     ah = np.concatenate([o[1] for o in outs], axis=-2)
     sens = np.concatenate([o[2] for o in outs], axis=-1)
-    return y, ah, sens, T * substeps
+    recs = np.concatenate([o[3] for o in outs], axis=0) if record else None
+    return y, ah, sens, T * substeps, recs
 
 
 def run_adaptive(model, y0, m: Motion, ts, jumps, rtol, atol, coupling):

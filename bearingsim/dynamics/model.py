@@ -70,15 +70,20 @@ class DynamicModel(eqx.Module):
             return None, None
         return contact_depths(self.bearing, advance(self.defects, phi, 1.0, self.spin_ratio), psi)
 
-    def ring_load(self, xrel, stage):
+    def ring_load(self, xrel, stage, full_state=False):
         """[Fx, Fy, Fz] the balls carry at relative translations xrel (3,) and stage = (cage
-        angle, shaft angle, shaft speed)."""
+        angle, shaft angle, shaft speed); ``full_state``: also the balls' per-ball record
+        (4, Z): Q_inner, Q_outer, alpha_inner, alpha_outer at the solve's last iterate."""
         th, phi, omega = stage[0], stage[1], stage[2]
         psi = self.bearing.ball_azimuths(th)
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        return bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations)[0]
+        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, full_state)
+        if not full_state:
+            return out[0]
+        st = out[1]
+        return out[0], jnp.stack([st.Q_inner, st.Q_outer, st.alpha_inner, st.alpha_outer])
 
     def masses(self):
         """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
@@ -92,16 +97,19 @@ class DynamicModel(eqx.Module):
         C = C.at[0, 3].set(-cb[0]).at[1, 4].set(-cb[1]).at[3, 0].set(-cb[0]).at[4, 1].set(-cb[1])
         return C.at[3, 3].set(cb[0] + ch).at[4, 4].set(cb[1] + ch)
 
-    def forces(self, x, stage, extra_x=0.0):
+    def forces(self, x, stage, extra_x=0.0, full_state=False):
         """(5,) position- and time-dependent forces on [shaft (3), housing (2)]: applied loads,
-        unbalance, bearing load R, support spring; ``extra_x`` adds to the housing along x."""
+        unbalance, bearing load R, support spring; ``extra_x`` adds to the housing along x.
+        ``full_state``: (forces, the balls' record (4, Z), see :meth:`ring_load`)."""
         p = self.params
         ph, w = stage[1], stage[2]
-        R = self.ring_load(jnp.stack([x[0] - x[3], x[1] - x[4], x[2]]), stage)
+        R = self.ring_load(jnp.stack([x[0] - x[3], x[1] - x[4], x[2]]), stage, full_state)
+        R, rec = R if full_state else (R, None)
         Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
         Fs = self.loads[:3] + Fu - R
         Fh = R[:2] - p.housing_stiffness * x[3:5] + jnp.stack([extra_x, 0.0 * extra_x])
-        return jnp.concatenate([Fs, Fh])
+        F = jnp.concatenate([Fs, Fh])
+        return (F, rec) if full_state else F
 
     def rhs(self, y, stage, extra_x=0.0):
         """dy/dt for y = [x_s (3), x_h (2), v_s (3), v_h (2)]."""
@@ -127,7 +135,8 @@ def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, cu
 
 def initial_state(model: DynamicModel, q_rel0, stage0):
     """Equilibrium of the lean model at t = 0 from the quasi-static displacement (Newton on the
-    3 translations, the quasi-static stiffness as Jacobian): (y0, converged, dy/dt at y0).
+    3 translations, the quasi-static stiffness as Jacobian): (y0, converged, dy/dt at y0, the
+    balls' record (4, Z) there: Q_inner, Q_outer, alpha_inner, alpha_outer).
 
     The housing sits at its static support deflection and everything is at rest, so dy/dt at
     y0 follows from the last residual r = R - F (shaft: -r plus the unbalance; housing: r_xy):
@@ -151,7 +160,8 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     ph, w = stage0[1], stage0[2]
     Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
     acc = jnp.concatenate([(Fu - r) / p.shaft_mass, r[:2] / p.housing_mass])
-    return y0, ok, jnp.concatenate([jnp.zeros(5), acc])
+    rec = model.ring_load(x, stage0, full_state=True)[1]
+    return y0, ok, jnp.concatenate([jnp.zeros(5), acc]), rec
 
 
 initial_state_jit = eqx.filter_jit(initial_state)

@@ -122,7 +122,9 @@ _ball_record_jit = eqx.filter_jit(_ball_record)
 def ball_records(model, rel, theta, phi, omega, iterations):
     """Per-sample ball loads and angles (Q_inner, Q_outer, alpha_inner, alpha_outer), each
     (T, Z): the lean solver at the recorded ring displacement ``rel`` (T, 3), cage angle, shaft
-    angle and speed (T,), in chunks of :data:`CHUNK` (one compilation)."""
+    angle and speed (T,), in chunks of :data:`CHUNK` (one compilation).  The fixed-step
+    integrator records them in its time loop; this is for a run without them (the adaptive
+    reference)."""
     T = rel.shape[0]
     tilts = np.broadcast_to(np.asarray(model.tilts), (CHUNK, 2))
     outs = []
@@ -184,7 +186,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
                     slip_reference(defects), realism)
     st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
-    y0, ok, dy0 = initial_state_jit(model, sol.displacement[:3], st0)
+    y0, ok, dy0, rec0 = initial_state_jit(model, sol.displacement[:3], st0)
     if not bool(ok):
         code = code or RESULTS.initial_equilibrium
     if substeps == "auto":
@@ -194,8 +196,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     progress = (float(duration) >= 1.0) if progress is None else bool(progress)
     jumps = defect_edge_times(m, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
     if code == RESULTS.successful:
+        recs = None
         if integrator == "fixed":
-            y, ah, sens, nsteps = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps, False, progress)
+            y, ah, sens, nsteps, recs = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps, False,
+                                                  progress, rec0 if record_balls else None)
         else:
             y, ah, sens, nsteps = run_adaptive(model, y0, m, ts, jumps, rtol, atol, sensor_coupling)
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(sens))):
@@ -213,7 +217,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
     balls = [None] * 4
     if record_balls and code == RESULTS.successful:
-        balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
+        if integrator == "fixed":          # recorded in the time loop, from its own ball solves
+            balls = [recs[:, k] for k in range(4)]
+        else:
+            balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
     labels = motion_labels(m, realism)
     labels["ball_solver_error"] = float(err)
     return DynamicsResult(
