@@ -109,8 +109,9 @@ def filter_output(flt: SensorFilter, s, u):
 
 def apply_sensor(housing_acceleration, h, frequencies, damping_ratios, gains=1.0):
     """The sensor signal of a housing-acceleration record sampled every h (s), modes at rest at
-    the first sample.  Pure JAX; for signals outside a simulation (e.g. a different sensor
-    path on a stored run: the step is then the sample interval)."""
+    the first sample (the modes discretised on the host, then a JAX scan); for signals outside
+    a simulation (e.g. a different sensor path on a stored run: the step is then the sample
+    interval)."""
     u = jnp.asarray(housing_acceleration, jnp.float64)
     flt = sensor_filter(frequencies, damping_ratios, gains, h)
 
