@@ -85,9 +85,7 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
     if record:
         c, hist = lax.scan(newton, init, None, length=n)
     else:
-        c = init
-        for _ in range(n):              # unrolled: a loop inside the time loop's body would be
-            c = newton(c, None)[0]      # a nested XLA while loop (no fusion across it)
+        c = lax.fori_loop(0, n, lambda _, c: newton(c, None)[0], init)
         hist = None
     X1, X2, G, H, g1, g2, h1, h2, d1, d2 = c
     G = G + g1 * d1 + g2 * d2
