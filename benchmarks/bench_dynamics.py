@@ -206,21 +206,16 @@ def main():
               f"baseline in wall time, {sc_cpu / args.scipy_duration / (cpu_o / args.duration):.0f} x in "
               f"CPU time (target >= 50)")
 
-    if args.count > 0:
-        r = dataset_run("dataset_cwru", args.count)
-        print(f"(c) data set {args.count} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of {r['chunk']}, "
-              f"a fresh process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after "
-              f"compilation (target <= 60 s), {args.count / r['el']:.1f} items/s, {r['failed']} failed "
-              f"({r['messages'] or 'none'}), "
-              f"file {r['size']:.0f} MB; peak RSS {r['rss']:.0f} MB (before {r['rss0']:.0f} MB; target <= 2048)")
-
-    if args.count4 > 0:
-        r = dataset_run("dataset_cwru_4class", args.count4)
-        print(f"(c) four-class data set {args.count4} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of "
-              f"{r['chunk']}, a fresh process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after compilation, "
-              f"{args.count4 / r['el']:.1f} items/s: 1000 items in ~{1000 * r['el'] / args.count4:.0f} s "
-              f"(target <= 60 s), {r['failed']} failed ({r['messages'] or 'none'}); peak RSS "
-              f"{r['rss']:.0f} MB (before {r['rss0']:.0f} MB; target <= 2048)")
+    for spec, count, what in (("dataset_cwru", args.count, "data set"),
+                              ("dataset_cwru_4class", args.count4, "four-class data set")):
+        if count <= 0:
+            continue
+        r = dataset_run(spec, count)
+        print(f"(c) {what} {count} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of {r['chunk']}, a fresh "
+              f"process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after compilation, {count / r['el']:.1f} "
+              f"items/s: 1000 items in ~{1000 * r['el'] / count:.0f} s (target <= 60 s), {r['failed']} failed "
+              f"({r['messages'] or 'none'}), file {r['size']:.0f} MB; peak RSS {r['rss']:.0f} MB (before "
+              f"{r['rss0']:.0f} MB; target <= 2048)")
 
     if not args.no_compile:
         with tempfile.TemporaryDirectory() as cache:
