@@ -11,10 +11,11 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
-import equinox as eqx
 import numpy as np
 import jax.numpy as jnp
 from jax import lax
+
+from .xla import jit
 
 _AGM_STEPS = 12      # m <= 1 - 1e-8 converges to 1 ulp in <= 7 steps
 _KAPPA_NEWTON = 8    # Brewe-Hamrock start is within ~3 %; Newton is quadratic
@@ -241,7 +242,7 @@ def _stiffness_curve(bearing, method: str = "exact") -> StiffnessCurve:
 
 #: :func:`_stiffness_curve` compiled once per bearing structure and method (called eagerly, its
 #: AGM and Newton loops would compile again on every call)
-stiffness_curve = eqx.filter_jit(_stiffness_curve)
+stiffness_curve = jit(_stiffness_curve)
 
 
 def contact_ellipse(curve: StiffnessCurve, cos_alpha, Q, inner: bool):

@@ -45,6 +45,7 @@ from .defect import Spall, contact_depths
 from .errors import InvalidStateError, NotConvergedError, ResultCode
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
+from .xla import jit
 
 __all__ = [
     "RESULTS",
@@ -201,6 +202,16 @@ def _evaluate(pb: _Problem, qz, Y, Yu, jac=True):
 _JAC_KEYS = ("Jbb", "Jba", "Cx", "Ca", "Jbbu", "Jbau")
 
 
+def _zero_piece(n_balls, defect):
+    """Zeros shaped like :func:`_evaluate`'s pieces (with the Jacobian blocks), without tracing
+    it again (each trace of the ball equations' Jacobian costs ~0.3 s of every compilation)."""
+    Z = n_balls
+    shapes = dict(rq=(5,), rb=(Z, 2), Jbb=(Z, 2, 2), Jba=(Z, 2, 2), Cx=(Z, 3, 2), Ca=(Z, 3, 2))
+    if defect:
+        shapes.update(rbu=(Z, 2), Jbbu=(Z, 2, 2), Jbau=(Z, 2, 2))
+    return {k: jnp.zeros(v, jnp.float64) for k, v in shapes.items()}
+
+
 def _merit(piece):
     m = jnp.maximum(jnp.max(jnp.abs(piece["rq"])), jnp.max(jnp.abs(piece["rb"])))
     if "rbu" in piece:
@@ -307,8 +318,7 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
             out.update(Yu=c["Yu"], dYu=c["dYu"])
         return out
 
-    zeros = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype),
-                                   jax.eval_shape(lambda: _evaluate(pb, qz0, Y0, Yu0)))
+    zeros = _zero_piece(bearing.n_balls, defect)
     init = dict(qz=qz0, Y=Y0, Yu=Y0 if Yu0 is None else Yu0, dq=jnp.zeros_like(qz0),
                 dY=jnp.zeros_like(Y0), dYu=jnp.zeros_like(Y0), m=jnp.float64(jnp.inf),
                 sn=jnp.float64(jnp.inf), t=jnp.float64(1.0), it=jnp.int32(-1), ls=jnp.int32(0),
@@ -478,10 +488,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     Y = nan if Y is None else Y
     Yu = nan if Yu is None else Yu
     pb = problem(1.0)
-    jac0 = jax.tree_util.tree_map(
-        lambda s_: jnp.zeros(s_.shape, s_.dtype),
-        {k: v for k, v in jax.eval_shape(lambda: _evaluate(pb, qz, Y, Yu if defect else None)).items()
-         if k in _JAC_KEYS})
+    jac0 = {k: v for k, v in _zero_piece(bearing.n_balls, defect).items() if k in _JAC_KEYS}
     (qz, Y, Yu, jac), (codes, its) = lax.scan(stage, (qz, Y, Yu, jac0), jnp.asarray(fracs))
     code, total_it = codes[-1], jnp.sum(its)
     # at rest the closed form is every ball's exact equilibrium for the converged q (rigid-ring
@@ -534,7 +541,7 @@ def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | tuple | None =
 
 
 # ------------------------------------------------------------------------------ entry points
-_solve_jit = eqx.filter_jit(solve_state)
+_solve_jit = jit(solve_state)
 
 
 def _traced(maxit, rtol, atol):
@@ -610,7 +617,7 @@ def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol
     return jax.vmap(one)(op, loads, cage_angle)
 
 
-_solve_batch_jit = eqx.filter_jit(_solve_batch)
+_solve_batch_jit = jit(_solve_batch)
 
 
 def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,

@@ -28,6 +28,7 @@ import numpy as np
 from .hertz import stiffness_curve
 from .defect import Spall, as_defects, contact_depths
 from .jones import JonesSolution, raise_for, solve, solve_state
+from .xla import jit
 
 __all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "defect_occupancy", "representatives",
            "sweep", "sweep_chunked", "defect_centre_edges", "defect_angles", "sweep_defect_angle"]
@@ -137,7 +138,7 @@ def _sweep_warm(bearing, op, loads, spall, angles, q0, x0, xu0, maxit, rtol, ato
     return jax.vmap(one)(angles, q0, x0, xu0, centers)
 
 
-_sweep_warm_jit = eqx.filter_jit(_sweep_warm)
+_sweep_warm_jit = jit(_sweep_warm)
 
 
 def _sweep_cold(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_method, centers=None,
@@ -154,7 +155,7 @@ def _sweep_cold(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_meth
     return jax.vmap(one)(angles, centers)
 
 
-_sweep_cold_jit = eqx.filter_jit(_sweep_cold)
+_sweep_cold_jit = jit(_sweep_cold)
 
 
 def _tolerances(maxit, rtol, atol):

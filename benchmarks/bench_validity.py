@@ -21,6 +21,7 @@ import numpy as np
 
 import bearingsim as bs
 from bearingsim import jones
+from bearingsim.xla import compiler_options
 
 GROUPS = [(z, c, p) for z, c in ((7, "outer"), (12, "inner"), (14, "outer"), (24, "equal"),
                                  (9, "inner"), (16, "equal"))
@@ -48,7 +49,7 @@ def batch_solver(Z, control, profile, speed_steps=1):
         return jones.solve_state(b, bs.Operation(w, control), F, cage_angle=cage, spall=sp,
                                  speed_steps=speed_steps)
 
-    return jax.jit(jax.vmap(one))
+    return jax.jit(jax.vmap(one), compiler_options=compiler_options())
 
 
 def check(Z, control, geo, w, sol):

@@ -7,6 +7,7 @@ import pytest
 import bearingsim as bs
 from bearingsim import jones
 from bearingsim.defect import depth_profile, wrap_angle
+from bearingsim.xla import compiler_options
 from conftest import ball_equilibrium_error, equilibrium_error
 
 DEG = np.pi / 180
@@ -97,7 +98,7 @@ def test_solution_is_differentiable_wrt_spall_depth(b218):
         R = lambda qq, d: jones.ring_reactions(b218, op, qq, 0.0, bs.Spall(0.0, 3 * DEG, d, "ball-path"))
         return q, R
     q, R = Q1(0.02e-3)
-    dRdd = jax.jit(jax.jacfwd(R, argnums=1))(q, 0.02e-3)
+    dRdd = jax.jit(jax.jacfwd(R, argnums=1), compiler_options=compiler_options())(q, 0.02e-3)
     dqdd = -np.linalg.solve(np.asarray(sol0.stiffness), np.asarray(dRdd))
     h = 1e-7
     sp_ = lambda d: bs.solve(b218, op, LOADS, spall=bs.Spall(0.0, 3 * DEG, d, "ball-path")).displacement

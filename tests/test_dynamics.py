@@ -12,6 +12,7 @@ from bearingsim import sensor
 from bearingsim.case import load_case, parse_case
 from bearingsim.signal import envelope_spectrum, peak_frequency, squared_envelope
 from bearingsim.sweep import sweep
+from bearingsim.xla import jit
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 CWRU_BPFO_MULT = 3.5848
@@ -230,7 +231,6 @@ def test_converged_lean_solve_is_the_exact_ball_state(name):
     exact ball state of balls.balls_at -- balls over the demo's 0.16 mm spall at 10 000 rpm
     (dropped and carried) and under an inner-race spall included.  Tolerance 1e-10 of the
     largest ball load: both are converged Newton solutions (measured 5e-14)."""
-    import equinox as eqx
     import jax
     import jax.numpy as jnp
     c = load_case(name)
@@ -238,7 +238,7 @@ def test_converged_lean_solve_is_the_exact_ball_state(name):
     curve = bs.hertz.stiffness_curve(b)
     q = bs.solve(b, op, F, cage_angle=c.cage_angle, spall=sp).displacement
 
-    @eqx.filter_jit
+    @jit
     def worst(th):
         def at(t):
             psi = b.ball_azimuths(t)

@@ -10,6 +10,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 import bearingsim as bs
 from bearingsim import jones
+from bearingsim.xla import compiler_options
 from conftest import DEG, ball_equilibrium_error, equilibrium_error, inverted_contacts
 
 
@@ -125,7 +126,7 @@ def test_stiffness_equals_central_difference(b218, rpm):
     op = bs.Operation.from_rpm(rpm)
     sol = bs.solve(b218, op, bs.Loads(axial=10000.0, radial_x=3000.0, moment_y=50.0), cage_angle=0.1)
     q = sol.displacement
-    R = jax.jit(lambda q: jones.ring_reactions(b218, op, q, 0.1))
+    R = jax.jit(lambda q: jones.ring_reactions(b218, op, q, 0.1), compiler_options=compiler_options())
     K = np.asarray(sol.stiffness)
     h = np.array([1e-8, 1e-8, 1e-8, 1e-7, 1e-7])
     for j in range(5):
@@ -149,8 +150,8 @@ def test_gradient_through_the_solve_is_the_implicit_derivative(b218):
         s = jones.solve_state(b218, o, bs.Loads(axial=10000.0, radial_x=Fx), cage_angle=0.05)
         return jnp.max(s.Q_outer), s.displacement[0]
 
-    f = jax.jit(Qmax)
-    g = jax.jit(jax.jacfwd(Qmax, argnums=(0, 1)))(2000.0, op.speed)
+    f = jax.jit(Qmax, compiler_options=compiler_options())
+    g = jax.jit(jax.jacfwd(Qmax, argnums=(0, 1)), compiler_options=compiler_options())(2000.0, op.speed)
     for k, (x0, h) in enumerate(((2000.0, 1e-2), (float(op.speed), 1e-3))):
         args = [2000.0, float(op.speed)]
         hi, lo = list(args), list(args)
@@ -287,4 +288,4 @@ def _batch(Z, control, profile):
         return jones.solve_state(b, bs.Operation(w, control), F, cage_angle=cage, spall=sp,
                                  speed_steps=2)
 
-    return jax.jit(jax.vmap(one))
+    return jax.jit(jax.vmap(one), compiler_options=compiler_options())

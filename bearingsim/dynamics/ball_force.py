@@ -14,7 +14,6 @@ speed of its undropped closed-form position.
 """
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -23,6 +22,7 @@ from jax import lax
 from ..balls import ball_state, groove_centre_offsets, static_ball_position
 from ..defect import advance, as_defects, contact_depths
 from ..kinematics import Operation, ball_kinematics_cs
+from ..xla import jit
 
 __all__ = ["bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
            "next_iterations", "ITER_CHOICES", "ITER_TOL", "REF_ITERATIONS", "REF_TOL"]
@@ -143,23 +143,27 @@ def ball_errors(bearing, op, q, spall, curve, angles, scales, shaft_angles=None,
     centre + phi; ball pit: spin angle + spin_ratio phi)."""
     phis = jnp.zeros_like(angles) if shaft_angles is None else shaft_angles
     sel = jnp.asarray(ITER_CHOICES) - 1
+    A, S = angles.shape[0], scales.shape[0]
 
-    def at(th, ph, s):
-        qq = q * s
+    def depths(th, ph):
         psi = bearing.ball_azimuths(th)
         Ho, Hi = contact_depths(bearing, None if spall is None else advance(spall, ph, 1.0, spin_ratio), psi)
-        G, H = bearing_force_history(bearing, op, curve, qq, psi, Ho, Hi, REF_ITERATIONS)
-        # the largest ball load (the inner contact's, |(G, H)|)
-        scale = jnp.max(jnp.sqrt(G[-1] * G[-1] + H[-1] * H[-1])) + 1e-30
-        err = jnp.maximum(jnp.max(jnp.abs(G - G[-1]), -1), jnp.max(jnp.abs(H - H[-1]), -1)) / scale
-        conv = jnp.maximum(jnp.max(jnp.abs(G[-1] - G[-2])), jnp.max(jnp.abs(H[-1] - H[-2]))) / scale
-        return jnp.where(conv <= REF_TOL, err[sel], jnp.inf)
+        return psi, _zeros_like(Ho, psi), _zeros_like(Hi, psi)
 
-    return jnp.max(jax.vmap(lambda th, ph: jax.vmap(lambda s: at(th, ph, s))(scales))(angles, phis),
-                   axis=(0, 1))
+    # every (cage angle, scaling) at once on leading axes (A, S, Z): the lean solve is
+    # element-wise, and a vmapped scan would re-trace its body in the batching rule (~1.5 s)
+    psi, Ho, Hi = (jnp.broadcast_to(a[:, None, :], (A, S, a.shape[-1]))
+                   for a in jax.vmap(depths)(angles, phis))
+    qq = q[:, None, None, None] * scales[None, None, :, None]           # (5, 1, S, 1)
+    G, H = bearing_force_history(bearing, op, curve, qq, psi, Ho, Hi, REF_ITERATIONS)
+    # the largest ball load (the inner contact's, |(G, H)|), per cage angle and scaling
+    scale = jnp.max(jnp.sqrt(G[-1] * G[-1] + H[-1] * H[-1]), -1) + 1e-30
+    err = jnp.maximum(jnp.max(jnp.abs(G - G[-1]), -1), jnp.max(jnp.abs(H - H[-1]), -1)) / scale
+    conv = jnp.maximum(jnp.max(jnp.abs(G[-1] - G[-2]), -1), jnp.max(jnp.abs(H[-1] - H[-2]), -1)) / scale
+    return jnp.max(jnp.where(conv <= REF_TOL, err[sel], jnp.inf), axis=(1, 2))
 
 
-_ball_errors_jit = eqx.filter_jit(ball_errors)
+_ball_errors_jit = jit(ball_errors)
 
 
 def next_iterations(its):

@@ -20,6 +20,7 @@ from ..errors import InputError
 from ..hertz import stiffness_curve
 from ..jones import solve, solve_state
 from ..kinematics import Operation
+from ..xla import jit
 from .ball_force import ITER_CHOICES, choose_ball_iterations, next_iterations
 from .integrate import check_scheme, run_fixed, time_grid
 from .model import build_model, choose_substeps, initial_state, linear_modes
@@ -91,8 +92,8 @@ def _qs_batch(bearing, op, loads, theta0, defects, hertz_method, speed_steps):
     return jax.vmap(one)(op, loads, theta0, defects)
 
 
-_qs_batch_jit = eqx.filter_jit(_qs_batch)
-_init_batch_jit = eqx.filter_jit(jax.vmap(initial_state))
+_qs_batch_jit = jit(_qs_batch)
+_init_batch_jit = jit(jax.vmap(initial_state))
 
 
 def batch_settings(bearing, op, loads, spall, theta0, sample_rate, params=None, hertz_method="exact"):

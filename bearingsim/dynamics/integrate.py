@@ -24,7 +24,6 @@ housing, ``coupling=True``, resonator mass ``m_r g_k`` per mode).
 """
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -32,6 +31,7 @@ from jax import lax
 
 from .. import sensor as sensor_mod
 from ..errors import InputError
+from ..xla import compiler_options, jit
 from .model import DynamicModel
 from .motion import Motion, motion_at
 
@@ -114,7 +114,7 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
     return lax.scan(sample, carry, (stages, jumps))
 
 
-_advance_jit = eqx.filter_jit(_advance)
+_advance_jit = jit(_advance)
 
 
 def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
@@ -122,7 +122,7 @@ def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
         model, carry, stages, jumps, h, flt)
 
 
-_advance_batch_jit = eqx.filter_jit(_advance_batch)
+_advance_batch_jit = jit(_advance_batch)
 
 
 def _stage_grid(scheme, substeps):
@@ -236,5 +236,5 @@ def run_adaptive(model, y0, m: Motion, ts, jumps, rtol, atol, coupling):
         du, ah, ak = full(t, u)
         return u[:10] * scale[:10], du[8:10], ah + jnp.sum(gg * ak)
 
-    y, ah, sens = jax.jit(jax.vmap(post))(jnp.asarray(ts), us)
+    y, ah, sens = jax.jit(jax.vmap(post), compiler_options=compiler_options())(jnp.asarray(ts), us)
     return np.asarray(y), np.asarray(ah), np.asarray(sens), int(sol.stats["num_steps"])

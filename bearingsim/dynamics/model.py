@@ -34,6 +34,7 @@ from jax import lax
 
 from ..defect import advance, contact_depths
 from ..kinematics import Operation
+from ..xla import jit
 from .ball_force import bearing_force
 from .parameters import DynamicsParameters
 
@@ -164,7 +165,7 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     return y0, ok, jnp.concatenate([jnp.zeros(5), acc]), rec
 
 
-initial_state_jit = eqx.filter_jit(initial_state)
+initial_state_jit = jit(initial_state)
 
 
 def linear_modes(model: DynamicModel):

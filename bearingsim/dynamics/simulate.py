@@ -21,6 +21,7 @@ from ..errors import InputError
 from ..hertz import stiffness_curve
 from ..jones import solve
 from ..kinematics import Operation, defect_frequencies
+from ..xla import jit
 from .ball_force import ITER_CHOICES, bearing_force, choose_ball_iterations
 from .integrate import CHUNK, check_scheme, run_adaptive, run_fixed, time_grid
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
@@ -116,7 +117,7 @@ def _ball_record(model: DynamicModel, q, psi, phi, omega, iterations):
     return jax.vmap(one)(q, psi, phi, omega)
 
 
-_ball_record_jit = eqx.filter_jit(_ball_record)
+_ball_record_jit = jit(_ball_record)
 
 
 def ball_records(model, rel, theta, phi, omega, iterations):

@@ -13,6 +13,7 @@ import pytest
 
 import bearingsim as bs
 from bearingsim import hertz
+from bearingsim.xla import compiler_options
 from conftest import DEG
 
 HARRIS_6_1 = "Harris & Kotzalas (2006) vol. 1 Table 6.1"
@@ -131,7 +132,7 @@ def _sjovall_map(Z):
     psi = b.ball_azimuths(0.0)
     curve = hertz.stiffness_curve(b)
 
-    @jax.jit
+    @functools.partial(jax.jit, compiler_options=compiler_options())
     def f(q):
         st_ = bs.balls_at(b, op, q, psi, curve)
         return jnp.max(st_.Q_inner), bs.reactions_from_balls(st_, psi)
