@@ -148,11 +148,16 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
 
     def newton(_, c):
         x = c[0] + c[2]                           # the previous iterate's step
-        r = model.ring_load(x, stage0) - F
+        R, rec = model.ring_load(x, stage0, full_state=True)
+        r = R - F
         dx = -jnp.linalg.solve(J, r)
-        return x, r, jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0)
+        return x, r, jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0), rec
 
-    x, r, _ = lax.fori_loop(0, _INIT_STEPS, newton, (q_rel0, jnp.zeros(3), jnp.zeros(3)))
+    # the balls' record rides along (it is the last evaluation's, at the returned x): one ball
+    # solve in the program instead of a second one after the loop
+    Z = model.bearing.n_balls
+    x, r, _, rec = lax.fori_loop(0, _INIT_STEPS, newton,
+                                 (q_rel0, jnp.zeros(3), jnp.zeros(3), jnp.zeros((4, Z))))
     scale = jnp.max(jnp.abs(F)) + 1.0
     ok = jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r)) & (jnp.max(jnp.abs(r)) <= 1e-9 * scale)
     p = model.params
@@ -161,7 +166,6 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     ph, w = stage0[1], stage0[2]
     Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
     acc = jnp.concatenate([(Fu - r) / p.shaft_mass, r[:2] / p.housing_mass])
-    rec = model.ring_load(x, stage0, full_state=True)[1]
     return y0, ok, jnp.concatenate([jnp.zeros(5), acc]), rec
 
 
