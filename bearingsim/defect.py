@@ -35,7 +35,7 @@ import jax.numpy as jnp
 PROFILES = ("rectangular", "ball-path")
 LOCATIONS = ("outer", "inner", "ball")
 
-__all__ = ["PROFILES", "LOCATIONS", "Spall", "NO_SPALL", "as_defects", "wrap_angle",
+__all__ = ["PROFILES", "LOCATIONS", "Spall", "NO_SPALL", "as_defects", "canonical_defects", "wrap_angle",
            "surface_radius", "depth_profile", "contact_depths", "ball_pit_depths", "advance"]
 
 
@@ -101,6 +101,13 @@ def as_defects(spall) -> tuple:
     if not all(isinstance(s, Spall) for s in out):
         raise TypeError("defects must be a Spall or a tuple of Spall")
     return out
+
+
+def canonical_defects(spall):
+    """One form per set of defects (None; a Spall; a tuple of two or more): the compiled solvers
+    are keyed on it, so ``Spall`` and ``(Spall,)`` share one compilation."""
+    d = as_defects(spall)
+    return None if not d else d[0] if len(d) == 1 else d
 
 
 def surface_radius(bearing, location):

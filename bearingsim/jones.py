@@ -41,7 +41,7 @@ from jax import lax
 from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, groove_centre_offsets,
                     inverse2, lift_onto_outer, offset_jacobian, reaction_matrix,
                     reactions_from_balls, static_ball_position)
-from .defect import Spall, contact_depths
+from .defect import Spall, canonical_defects, contact_depths
 from .errors import InvalidStateError, NotConvergedError, ResultCode
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
@@ -594,7 +594,7 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
     q0 = None if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     maxit, rtol, atol = _traced(maxit, rtol, atol)
-    kw = dict(cage_angle=cage_angle, spall=spall, maxit=maxit, rtol=rtol, atol=atol,
+    kw = dict(cage_angle=cage_angle, spall=canonical_defects(spall), maxit=maxit, rtol=rtol, atol=atol,
               hertz_method=hertz_method)
     sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
     if int(sol.result) != 0 and (speed_steps < 8 or q0 is not None):
@@ -636,6 +636,7 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
                         jnp.broadcast_to(op.gyroscopic, (n,))))
     cage = jnp.broadcast_to(jnp.asarray(cage_angle, dtype=jnp.float64), (n,))
     maxit, rtol, atol = _traced(maxit, rtol, atol)
+    spall = canonical_defects(spall)
     sol = _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,
                            hertz_method)
     bad = np.flatnonzero(np.asarray(sol.result) != 0)

@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .hertz import stiffness_curve
-from .defect import Spall, as_defects, contact_depths
+from .defect import Spall, as_defects, canonical_defects, contact_depths
 from .jones import JonesSolution, raise_for, solve, solve_state
 from .xla import jit
 
@@ -190,6 +190,7 @@ def _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, h
     loads = jnp.asarray(loads, jnp.float64)
     tol = _tolerances(maxit, rtol, atol)
     kw = dict(maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, throw=False)
+    spall = canonical_defects(spall)
     at = (lambda k: spall) if centers is None else (lambda k: _with_center(spall, which, centers[k]))
     extra = {} if centers is None else dict(centers=centers, which=which)
     # one cold solve per run of equal defect occupancy (the same compiled single solve), then

@@ -68,9 +68,11 @@ def test_slow_heavily_damped_follows_quasi_static_sweep(cwru):
     dur = 1.8 * float(sp.extent) / float(sol.cage_speed)
     r = dyn.simulate(b, op, F, spall, p, dur, 2000.0 / dur, theta0=theta0, progress=False)
     assert r.result == 0
-    ref = sweep(b, op, F, spall, angles=np.asarray(r.cage_angle))
+    # every 10th sample: 200 cage angles over the crossing (the profile is smooth and the
+    # loads follow it slowly; the sweep of all 2000 cost most of the test's minute)
+    ref = sweep(b, op, F, spall, angles=np.asarray(r.cage_angle)[::10])
     assert np.all(np.asarray(ref.result) == 0)
-    Qo, Qref = np.asarray(r.Q_outer), np.asarray(ref.Q_outer)
+    Qo, Qref = np.asarray(r.Q_outer)[::10], np.asarray(ref.Q_outer)
     err = np.max(np.abs(Qo - Qref)) / np.max(Qref)
     print("max relative ball-load difference dynamic vs sweep", err)
     assert err < 0.03, err
