@@ -44,6 +44,7 @@ __all__ = [
     "offset_jacobian",
     "ball_equations",
     "ball_state",
+    "orbital_speed",
     "static_ball_position",
     "ball_newton_step",
     "solve_ball_fixed",
@@ -138,13 +139,18 @@ class _Contacts(NamedTuple):
     Q_o: jnp.ndarray
 
 
-def _contacts(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
-    D = bearing.ball_diameter
+def _contacts_geometry(X1, X2, A1, A2):
+    """(sin a_o, cos a_o, sin a_i, cos a_i, L_o, L_i): the contact directions and the centre
+    distances of a ball at (X1, X2)."""
     Lo = jnp.sqrt(X1 * X1 + X2 * X2)
     ui, vi = A1 - X1, A2 - X2
     Li = jnp.sqrt(ui * ui + vi * vi)
-    so, co = _safe_div(X1, Lo), _safe_div(X2, Lo)
-    si, ci = _safe_div(ui, Li), _safe_div(vi, Li)
+    return _safe_div(X1, Lo), _safe_div(X2, Lo), _safe_div(ui, Li), _safe_div(vi, Li), Lo, Li
+
+
+def _contacts(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
+    D = bearing.ball_diameter
+    so, co, si, ci, Lo, Li = _contacts_geometry(X1, X2, A1, A2)
     delta_o = Lo - (bearing.f_outer - 0.5) * D - H_outer
     delta_i = Li - (bearing.f_inner - 0.5) * D - H_inner
     K_i = power_eval(curve.inner_power, ci)
@@ -186,6 +192,14 @@ def ball_equations(bearing, op: Operation, curve, v, H_outer=0.0, H_inner=0.0, c
     r1, r2, G, H, m, wm, *_ = _forces(bearing, op, c, H_outer, H_inner, carried_speed)
     out = jnp.stack([r1, r2, G, H, m / bearing.inner_groove_radius]) / KN
     return out, wm
+
+
+def orbital_speed(bearing, op: Operation, X1, X2, A1, A2):
+    """The orbital speed omega_m (rad/s) of a ball centred at (X1, X2) (m) with the inner
+    groove-curvature centre at (A1, A2): that of :func:`ball_state` (it depends on the contact
+    angles only, not on the loads)."""
+    c = _contacts_geometry(X1, X2, A1, A2)
+    return ball_kinematics_cs(bearing, op, c[2], c[3], c[0], c[1])[2]
 
 
 def ball_state(bearing, op: Operation, x, A1, A2, curve, H_outer=0.0, H_inner=0.0,

@@ -39,7 +39,7 @@ import numpy as np
 from jax import lax
 
 from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, groove_centre_offsets,
-                    inverse2, lift_onto_outer, offset_jacobian, reaction_matrix,
+                    inverse2, lift_onto_outer, offset_jacobian, orbital_speed, reaction_matrix,
                     reactions_from_balls, static_ball_position)
 from .defect import Spall, canonical_defects, contact_depths
 from .errors import InvalidStateError, NotConvergedError, ResultCode
@@ -180,17 +180,28 @@ def _evaluate(pb: _Problem, qz, Y, Yu, jac=True):
     q = qz * pb.qs
     A1, A2 = groove_centre_offsets(pb.bearing, q, pb.psi)
     a = jnp.stack([A1, A2], axis=-1) / UM
-    ws = None
     piece = {}
     if pb.defect:
-        out_u, J_u, wm_u = jax.vmap(lambda y, aa: _per_ball(pb, y, aa, 0.0, 0.0, None, jac))(Yu, a)
-        ws = lax.stop_gradient(wm_u)
+        # the undropped balls (no defect) and the dropped ones in one vmapped evaluation over 2Z
+        # balls (one copy of the ball equations' Jacobian in the program, not two); a dropped
+        # ball without inner contact is carried at its undropped twin's orbital speed, which
+        # depends on the contact angles only (no derivative flows through it); an undropped
+        # ball (depth 0) is never carried, so the speed passed to it has no effect
+        Z = pb.psi.shape[0]
+        ws = lax.stop_gradient(jax.vmap(lambda y, aa: orbital_speed(
+            pb.bearing, pb.op, y[0] * UM, y[1] * UM, aa[0] * UM, aa[1] * UM))(Yu, a))
+        zero = jnp.zeros_like(pb.H_outer)
+        out2, J2, _ = jax.vmap(lambda y, aa, ho, hi, w: _per_ball(pb, y, aa, ho, hi, w, jac))(
+            jnp.concatenate([Yu, Y]), jnp.concatenate([a, a]), jnp.concatenate([zero, pb.H_outer]),
+            jnp.concatenate([zero, pb.H_inner]), jnp.concatenate([ws, ws]))
+        out_u, out = out2[:Z], out2[Z:]
         piece["rbu"] = out_u[:, :2]
         if jac:
+            J_u, J = J2[:Z], J2[Z:]
             piece.update(Jbbu=J_u[:, :2, :2], Jbau=J_u[:, :2, 2:])
-    out, J, _ = jax.vmap(lambda y, aa, ho, hi, w: _per_ball(pb, y, aa, ho, hi, w, jac),
-                         in_axes=(0, 0, 0, 0, None if ws is None else 0))(Y, a, pb.H_outer,
-                                                                           pb.H_inner, ws)
+    else:
+        out, J, _ = jax.vmap(lambda y, aa, ho, hi: _per_ball(pb, y, aa, ho, hi, None, jac))(
+            Y, a, pb.H_outer, pb.H_inner)
     T = reaction_matrix(pb.psi)                                   # (Z, 5, 3)
     piece["rq"] = jnp.einsum("zij,zj->i", T, out[:, 2:]) - pb.Fn
     piece["rb"] = out[:, :2]
