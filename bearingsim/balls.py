@@ -33,6 +33,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
+from .fastmath import norm2, pow15, recip, safe_div
 from .hertz import power_eval
 from .kinematics import Operation, ball_kinematics_cs
 
@@ -44,6 +45,7 @@ __all__ = [
     "offset_jacobian",
     "ball_equations",
     "ball_state",
+    "contact_record",
     "orbital_speed",
     "static_ball_position",
     "ball_newton_step",
@@ -114,15 +116,15 @@ def reaction_matrix(psi):
     return jnp.stack(rows, axis=-2)
 
 
-def _pow15(loaded, delta):
-    """delta^1.5 where ``loaded``, else 0, with finite derivatives everywhere (no pow)."""
-    d = jnp.where(loaded, delta, 1.0)
-    return jnp.where(loaded, d * jnp.sqrt(d), 0.0)
-
-
-def _safe_div(a, b):
+def _quotient(a, b):
+    """a / b where b > 0, else 0, rounded as a division (the closed form is not differentiated)."""
     ok = b > 0.0
     return jnp.where(ok, a / jnp.where(ok, b, 1.0), 0.0)
+
+
+def _pow15(loaded, delta):
+    """delta^1.5 where ``loaded``, else 0, with finite derivatives everywhere (no pow)."""
+    return jnp.where(loaded, pow15(jnp.where(loaded, delta, 1.0)), 0.0)
 
 
 # ------------------------------------------------------------------------ ball equations
@@ -142,10 +144,10 @@ class _Contacts(NamedTuple):
 def _contacts_geometry(X1, X2, A1, A2):
     """(sin a_o, cos a_o, sin a_i, cos a_i, L_o, L_i): the contact directions and the centre
     distances of a ball at (X1, X2)."""
-    Lo = jnp.sqrt(X1 * X1 + X2 * X2)
     ui, vi = A1 - X1, A2 - X2
-    Li = jnp.sqrt(ui * ui + vi * vi)
-    return _safe_div(X1, Lo), _safe_div(X2, Lo), _safe_div(ui, Li), _safe_div(vi, Li), Lo, Li
+    Lo, ro = norm2(X1, X2)            # a length and its reciprocal: one sqrt, one division
+    Li, ri = norm2(ui, vi)
+    return X1 * ro, X2 * ro, ui * ri, vi * ri, Lo, Li
 
 
 def _contacts(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
@@ -168,13 +170,13 @@ def _forces(bearing, op: Operation, c: _Contacts, H_outer, H_inner, carried_spee
     if carried_speed is not None:
         # not driven by the inner ring over a defect: the cage carries it (MODEL.md 5)
         carried = (c.Q_i <= 0.0) & ((H_outer + H_inner) > 0.0)
-        ratio = carried_speed / jnp.where(wm != 0.0, wm, 1.0)
+        ratio = carried_speed * recip(jnp.where(wm != 0.0, wm, 1.0))
         scale = jnp.where(carried & (wm != 0.0), ratio * ratio, 1.0)
         wm = jnp.where(carried, carried_speed, wm)
         Fc, Mg = Fc * scale, Mg * scale
     lam_i, lam_o = op.factors
-    fi = lam_i * Mg / D
-    fo = lam_o * Mg / D
+    fi = (lam_i / D) * Mg
+    fo = (lam_o / D) * Mg
     G = c.Q_i * c.si + fi * c.ci
     H = c.Q_i * c.ci - fi * c.si
     r1 = G - c.Q_o * c.so - fo * c.co
@@ -213,13 +215,22 @@ def ball_state(bearing, op: Operation, x, A1, A2, curve, H_outer=0.0, H_inner=0.
                      m, r1, r2)
 
 
+def contact_record(bearing, curve, x, A1, A2, H_outer=0.0, H_inner=0.0):
+    """(Q_inner, Q_outer, sin a_i, cos a_i, sin a_o, cos a_o) of a ball centred at x = (X1, X2)
+    stacked on a leading axis: the loads and contact directions of :func:`ball_state` without
+    its kinematics and angles (a time loop records these and takes the arctangents afterwards:
+    alpha = arctan2(sin, cos))."""
+    c = _contacts(bearing, curve, x[0], x[1], A1, A2, H_outer, H_inner)
+    return jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
+
+
 def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_inner=0.0):
     """Closed-form ball centre at omega = 0 (collinear contacts, delta_i/delta_o =
     (K_o/K_i)^(2/3)), exact at rest; at speed it is pushed out to at least the outer deflection
     that carries the ball's own centrifugal force (returned as ``d_c``, m)."""
     D = bearing.ball_diameter
     L = jnp.sqrt(A1 * A1 + A2 * A2)
-    s, c = _safe_div(A1, L), _safe_div(A2, L)
+    s, c = _quotient(A1, L), _quotient(A2, L)
     d_tot = L - bearing.A - H_outer - H_inner
     K_i = power_eval(curve.inner_power, c)
     K_o = power_eval(curve.outer_power, c)
@@ -239,7 +250,7 @@ def lift_onto_outer(bearing, y, d_c, H_outer):
     Lo = jnp.sqrt(y[..., 0] ** 2 + y[..., 1] ** 2) * UM
     d_o = Lo - (bearing.f_outer - 0.5) * D - H_outer
     lift = (d_c > 0.0) & (d_o <= 0.0)
-    target = _safe_div((bearing.f_outer - 0.5) * D + H_outer + 0.5 * d_c, Lo)
+    target = safe_div((bearing.f_outer - 0.5) * D + H_outer + 0.5 * d_c, Lo)
     return jnp.where(lift[..., None], y * target[..., None], y)
 
 

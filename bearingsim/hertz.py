@@ -15,6 +15,7 @@ import numpy as np
 import jax.numpy as jnp
 from jax import lax
 
+from .fastmath import clamp
 from .xla import jit
 
 _AGM_STEPS = 12      # m <= 1 - 1e-8 converges to 1 ulp in <= 7 steps
@@ -261,7 +262,7 @@ def power_eval(coeffs, cos_alpha):
     """K at contact angle alpha from its cosine: a power series (Horner), e.g.
     ``StiffnessCurve.inner_power``; the same values as :func:`chebyshev_eval` of the Chebyshev
     form to ~1e-16 relative."""
-    x = jnp.clip(cos_alpha, -1.0, 1.0)
+    x = clamp(cos_alpha, -1.0, 1.0)
     r = coeffs[-1] + jnp.zeros_like(x)
     for k in range(coeffs.shape[-1] - 2, -1, -1):
         r = r * x + coeffs[k]

@@ -9,6 +9,8 @@ from typing import NamedTuple
 import equinox as eqx
 import jax.numpy as jnp
 
+from .fastmath import recip, rsqrt
+
 #: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
 CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)}
 _DEN_FLOOR = 0.05
@@ -68,10 +70,11 @@ def ball_kinematics_cs(bearing, op: Operation, sin_i, cos_i, sin_o, cos_o):
         num, den_b = sin_i, cos_i - g
     else:
         num, den_b = sin_o, cos_o + g
-    hyp = jnp.sqrt(num * num + den_b * den_b)
-    ok = hyp > 0.0
-    sb = jnp.where(ok, num / jnp.where(ok, hyp, 1.0), 0.0)
-    cb = jnp.where(ok, den_b / jnp.where(ok, hyp, 1.0), 1.0)
+    hyp2 = num * num + den_b * den_b
+    ok = hyp2 > 0.0
+    ih = rsqrt(jnp.where(ok, hyp2, 1.0))
+    sb = jnp.where(ok, num * ih, 0.0)
+    cb = jnp.where(ok, den_b * ih, 1.0)
     # omega_m = omega k_i/(k_i+k_o), omega_R = omega k_i k_o/((k_i+k_o) g) with the denominators
     # cos(alpha - beta) cleared: regular through alpha - beta = 90 deg.  The remaining
     # denominator n_i c_o + n_o c_i vanishes only for a ball far off both raceways (a geometric
@@ -81,10 +84,11 @@ def ball_kinematics_cs(bearing, op: Operation, sin_i, cos_i, sin_o, cos_o):
     n_o = 1.0 + g * cos_o
     c_i = cos_i * cb + sin_i * sb          # cos(alpha_i - beta)
     c_o = cos_o * cb + sin_o * sb          # cos(alpha_o - beta)
-    den = jnp.maximum(n_i * c_o + n_o * c_i, _DEN_FLOOR)
+    den = n_i * c_o + n_o * c_i
+    iden = recip(jnp.where(den > _DEN_FLOOR, den, _DEN_FLOOR))     # (a max's derivative divides)
     w = op.speed
-    w_m = w * n_i * c_o / den
-    w_R = w * n_i * n_o / (den * g)
+    w_m = w * n_i * c_o * iden
+    w_R = (w / g) * n_i * n_o * iden
     Fc = op.centrifugal * 0.5 * bearing.ball_mass * bearing.pitch_diameter * w_m * w_m
     Mg = op.gyroscopic * bearing.ball_inertia * w_R * w_m * sb
     return sb, cb, w_m, w_R, Fc, Mg

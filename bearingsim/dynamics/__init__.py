@@ -20,8 +20,8 @@ from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase,
                      motion_at, motion_labels, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
-from .ball_force import (ITER_CHOICES, REF_ITERATIONS, ball_errors, bearing_force, bearing_force_history,
-                         choose_ball_iterations, next_iterations)
+from .ball_force import (ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, ball_errors, bearing_force,
+                         bearing_force_history, choose_ball_iterations, next_iterations, record_loads_angles)
 
 # -------------------------------------------------------------------------------- model
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
@@ -43,7 +43,7 @@ __all__ = [
     "Motion", "draw_motion", "motion_at", "seed_streams", "motion_labels", "defect_phase",
     "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
     "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
-    "next_iterations",
+    "next_iterations", "RECORD_ROWS", "record_loads_angles",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",

@@ -19,12 +19,13 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from ..balls import ball_state, groove_centre_offsets, static_ball_position
+from ..balls import ball_state, contact_record, groove_centre_offsets, static_ball_position
 from ..defect import advance, as_defects, contact_depths
+from ..fastmath import norm2, recip
 from ..kinematics import Operation, ball_kinematics_cs
 from ..xla import jit
 
-__all__ = ["bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
+__all__ = ["bearing_force", "bearing_force_history", "RECORD_ROWS", "record_loads_angles", "ball_errors", "choose_ball_iterations",
            "next_iterations", "ITER_CHOICES", "ITER_TOL", "REF_ITERATIONS", "REF_TOL"]
 
 #: Newton step counts the lean ball solver is checked with (a ball dropping into a deep spall at
@@ -35,17 +36,33 @@ ITER_CHOICES = (1, 2, 3, 4, 8, 16)
 ITER_TOL = 1e-3
 
 
+#: rows of the balls' per-sample record of a time loop: Q_inner, Q_outer (N) and the sines and
+#: cosines of alpha_inner, alpha_outer (:func:`bearingsim.balls.contact_record`)
+RECORD_ROWS = 6
+
+
+def record_loads_angles(rec):
+    """(Q_inner, Q_outer, alpha_inner, alpha_outer) from records (..., RECORD_ROWS, Z) (host
+    arrays; the angles in rad from the recorded sines and cosines)."""
+    rec = np.asarray(rec)
+    return (rec[..., 0, :], rec[..., 1, :], np.arctan2(rec[..., 2, :], rec[..., 3, :]),
+            np.arctan2(rec[..., 4, :], rec[..., 5, :]))
+
+
 def _zeros_like(H, psi):
     return jnp.zeros_like(psi) if H is None else H
 
 
-def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
-    """The lean ball solve: (X1, X2, G, H, its closure for the ball state) after ``iterations``
-    steps; ``record``: also the linearised (G, H) after every step, stacked (iterations, ...)."""
+def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, contacts=False):
+    """The lean ball solve: (X1, X2, G, H, its closure for the ball state, the linearised (G, H)
+    after every step stacked (iterations, ...) with ``record`` (else None), (A1, A2, H_outer,
+    H_inner), the linearised :func:`bearingsim.balls.contact_record` with ``contacts`` (else
+    None)) after ``iterations`` steps.  Every quantity is linearised about the last iterate:
+    q + (dq/dX) d for the last step d (second-order error, like the loads)."""
     Ho, Hi = _zeros_like(H_outer, psi), _zeros_like(H_inner, psi)
     A1, A2 = groove_centre_offsets(bearing, q, psi)
-    L = jnp.sqrt(A1 * A1 + A2 * A2)
-    s, c = A1 / L, A2 / L
+    _, rL = norm2(A1, A2)
+    s, c = A1 * rL, A2 * rL
     # undropped closed-form orbital speed: collinear contacts along (A1, A2)
     ws = ball_kinematics_cs(bearing, op, s, c, s, c)[2]
     x0, _ = static_ball_position(bearing, op, A1, A2, curve, Ho, Hi)
@@ -56,41 +73,48 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
 
     def f(X1, X2):
         st = state(X1, X2)
-        return st.r_axial, st.r_radial, st.ball_G, st.ball_H
+        lin = (st.ball_G, st.ball_H)
+        if contacts:        # the same contacts as st's (XLA merges the two evaluations)
+            lin = lin + (contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi),)
+        return (st.r_axial, st.r_radial), lin
 
     one, zero = jnp.ones_like(X1), jnp.zeros_like(X1)
     cap = 2e-3 * bearing.ball_diameter
 
+    def linearised(lin, t1, t2, d1, d2):
+        return jax.tree_util.tree_map(lambda v, a, b: v + a * d1 + b * d2, lin, t1, t2)
+
     def newton(c, _):
-        X1, X2 = c[0] + c[8], c[1] + c[9]         # the previous iterate's step
-        (r1, r2, G, H), (a11, a21, g1, h1) = jax.jvp(f, (X1, X2), (one, zero))
-        _, (a12, a22, g2, h2) = jax.jvp(f, (X1, X2), (zero, one))
+        X1, X2 = c[0] + c[5], c[1] + c[6]         # the previous iterate's step
+        ((r1, r2), lin), ((a11, a21), t1) = jax.jvp(f, (X1, X2), (one, zero))
+        _, ((a12, a22), t2) = jax.jvp(f, (X1, X2), (zero, one))
         # regularised 2x2 solve (a ball out of contact at rest: J = 0, r = 0, zero step)
         sc = jnp.maximum(jnp.maximum(jnp.abs(a11), jnp.abs(a12)), jnp.maximum(jnp.abs(a21), jnp.abs(a22)))
         mu = 1e-13 * sc + 1e-300
         b11, b22 = a11 + mu, a22 + mu
         det = b11 * b22 - a12 * a21
-        det = jnp.where(jnp.abs(det) > 1e-300, det, 1e-300)
-        d1 = -(b22 * r1 - a12 * r2) / det
-        d2 = -(b11 * r2 - a21 * r1) / det
+        idet = recip(jnp.where(jnp.abs(det) > 1e-300, det, 1e-300))
+        d1 = -(b22 * r1 - a12 * r2) * idet
+        d2 = -(b11 * r2 - a21 * r1) * idet
         n = jnp.maximum(jnp.abs(d1), jnp.abs(d2))
-        k = jnp.where(n > cap, cap / jnp.where(n > 0, n, 1.0), 1.0)
+        k = jnp.where(n > cap, cap * recip(jnp.where(n > 0, n, 1.0)), 1.0)
         ok = jnp.isfinite(d1) & jnp.isfinite(d2)
         d1, d2 = jnp.where(ok, d1 * k, 0.0), jnp.where(ok, d2 * k, 0.0)
-        out = (G + g1 * d1 + g2 * d2, H + h1 * d1 + h2 * d2) if record else None
-        return (X1, X2, G, H, g1, g2, h1, h2, d1, d2), out
+        out = linearised(lin[:2], t1[:2], t2[:2], d1, d2) if record else None
+        return (X1, X2, lin, t1, t2, d1, d2), out
 
-    init = (X1, X2) + (zero,) * 8
+    lin0 = (zero, zero) + ((jnp.zeros((RECORD_ROWS,) + zero.shape),) if contacts else ())
+    init = (X1, X2, lin0, lin0, lin0, zero, zero)
     n = max(int(iterations), 1)
     if record:
         c, hist = lax.scan(newton, init, None, length=n)
     else:
         c = lax.fori_loop(0, n, lambda _, c: newton(c, None)[0], init)
         hist = None
-    X1, X2, G, H, g1, g2, h1, h2, d1, d2 = c
-    G = G + g1 * d1 + g2 * d2
-    H = H + h1 * d1 + h2 * d2
-    return X1 + d1, X2 + d2, G, H, state, hist
+    X1, X2, lin, t1, t2, d1, d2 = c
+    lin = linearised(lin, t1, t2, d1, d2)
+    return (X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi),
+            lin[2] if contacts else None)
 
 
 def _ring_load(G, H, psi):
@@ -99,18 +123,23 @@ def _ring_load(G, H, psi):
 
 
 def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None, iterations=1,
-                  full_state=False):
+                  full_state=False, record=False):
     """Load [Fx, Fy, Fz] (N) the balls carry at ring displacement q (5,) and azimuths psi (Z,),
     each ball solved from the omega = 0 closed form by ``iterations`` Newton steps (exact
     Jacobian), its loads linearised about the last iterate.  ``H_outer``/``H_inner``: defect
     depths at each ball's outer / inner contact (m; None: 0).  Element-wise over balls (and any
     leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
     sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
-    :class:`bearingsim.balls.BallState` at the last iterate instead)."""
-    X1, X2, G, H, state, _ = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, False)
+    :class:`bearingsim.balls.BallState` at the last iterate instead; ``record``: their
+    (RECORD_ROWS, Z) record, :func:`bearingsim.balls.contact_record` linearised like the loads
+    from the last Newton step's own evaluation: no extra ball evaluation)."""
+    X1, X2, G, H, state, _, _, rec = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations,
+                                             False, contacts=record)
     R = _ring_load(G, H, psi)
     if full_state:
         return R, state(X1, X2)
+    if record:
+        return R, rec
     return R, G, H
 
 

@@ -60,7 +60,7 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
     """Advance over a chunk: ``stages`` (N, S, n_c, 3) motion at the non-zero stage points of
     every step, ``jumps`` (N, S) the fraction of the step at which a ball crosses a rectangular
     spall edge (-1: none).  carry = (y, dy, s, rec): state, its derivative, sensor-mode states,
-    the balls' record (4, Z) at y (Q_inner, Q_outer, alpha_inner, alpha_outer; only with
+    the balls' record (RECORD_ROWS, Z) at y (:meth:`DynamicModel.ring_load`; only with
     ``record``: Newmark takes it from the step's own force evaluation, the Runge-Kutta schemes
     evaluate it once more).  Returns the new carry and per sample (y, a_h (2), sensor[, rec])
     at the sample instant."""
@@ -163,7 +163,8 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     """Chunked fixed-step integration of one model (batch=False) or a batch (motions and the
     rectangular spall edge times ``edges`` lists).  Returns host arrays y (.., T, 10),
     a_h (.., T, 2), sensor (.., T), the number of steps and, with the balls' record at t = 0
-    ``rec0`` (4, Z) (one model only), the per-sample records (T, 4, Z) (else None)."""
+    ``rec0`` (RECORD_ROWS, Z) (one model only), the per-sample records (T, RECORD_ROWS, Z)
+    (else None)."""
     h = 1.0 / (substeps * fs)
     grid = _stage_grid(scheme, substeps)
     f, z, g = model.params.modes()

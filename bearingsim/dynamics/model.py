@@ -35,7 +35,7 @@ from jax import lax
 from ..defect import advance, contact_depths
 from ..kinematics import Operation
 from ..xla import jit
-from .ball_force import bearing_force
+from .ball_force import RECORD_ROWS, bearing_force
 from .parameters import DynamicsParameters
 
 __all__ = ["DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps", "STEP_RHO"]
@@ -74,17 +74,16 @@ class DynamicModel(eqx.Module):
     def ring_load(self, xrel, stage, full_state=False):
         """[Fx, Fy, Fz] the balls carry at relative translations xrel (3,) and stage = (cage
         angle, shaft angle, shaft speed); ``full_state``: also the balls' per-ball record
-        (4, Z): Q_inner, Q_outer, alpha_inner, alpha_outer at the solve's last iterate."""
+        (RECORD_ROWS, Z) at the solve's last iterate: Q_inner, Q_outer and the sines and cosines
+        of alpha_inner, alpha_outer (:func:`bearingsim.dynamics.record_loads_angles` gives the
+        angles)."""
         th, phi, omega = stage[0], stage[1], stage[2]
         psi = self.bearing.ball_azimuths(th)
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, full_state)
-        if not full_state:
-            return out[0]
-        st = out[1]
-        return out[0], jnp.stack([st.Q_inner, st.Q_outer, st.alpha_inner, st.alpha_outer])
+        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state)
+        return (out[0], out[1]) if full_state else out[0]
 
     def masses(self):
         """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
@@ -101,7 +100,7 @@ class DynamicModel(eqx.Module):
     def forces(self, x, stage, extra_x=0.0, full_state=False):
         """(5,) position- and time-dependent forces on [shaft (3), housing (2)]: applied loads,
         unbalance, bearing load R, support spring; ``extra_x`` adds to the housing along x.
-        ``full_state``: (forces, the balls' record (4, Z), see :meth:`ring_load`)."""
+        ``full_state``: (forces, the balls' record (RECORD_ROWS, Z), see :meth:`ring_load`)."""
         p = self.params
         ph, w = stage[1], stage[2]
         R = self.ring_load(jnp.stack([x[0] - x[3], x[1] - x[4], x[2]]), stage, full_state)
@@ -137,7 +136,7 @@ def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, cu
 def initial_state(model: DynamicModel, q_rel0, stage0):
     """Equilibrium of the lean model at t = 0 from the quasi-static displacement (Newton on the
     3 translations, the quasi-static stiffness as Jacobian): (y0, converged, dy/dt at y0, the
-    balls' record (4, Z) there: Q_inner, Q_outer, alpha_inner, alpha_outer).
+    balls' record (RECORD_ROWS, Z) there, see :meth:`DynamicModel.ring_load`).
 
     The housing sits at its static support deflection and everything is at rest, so dy/dt at
     y0 follows from the last residual r = R - F (shaft: -r plus the unbalance; housing: r_xy):
@@ -157,7 +156,7 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     # solve in the program instead of a second one after the loop
     Z = model.bearing.n_balls
     x, r, _, rec = lax.fori_loop(0, _INIT_STEPS, newton,
-                                 (q_rel0, jnp.zeros(3), jnp.zeros(3), jnp.zeros((4, Z))))
+                                 (q_rel0, jnp.zeros(3), jnp.zeros(3), jnp.zeros((RECORD_ROWS, Z))))
     scale = jnp.max(jnp.abs(F)) + 1.0
     ok = jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r)) & (jnp.max(jnp.abs(r)) <= 1e-9 * scale)
     p = model.params

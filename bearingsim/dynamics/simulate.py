@@ -22,7 +22,7 @@ from ..hertz import stiffness_curve
 from ..jones import solve
 from ..kinematics import Operation, defect_frequencies
 from ..xla import jit
-from .ball_force import ITER_CHOICES, bearing_force, choose_ball_iterations
+from .ball_force import ITER_CHOICES, bearing_force, choose_ball_iterations, record_loads_angles
 from .integrate import CHUNK, check_scheme, run_adaptive, run_fixed, time_grid
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
 from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at, motion_labels, seed_streams
@@ -219,7 +219,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     balls = [None] * 4
     if record_balls and code == RESULTS.successful:
         if integrator == "fixed":          # recorded in the time loop, from its own ball solves
-            balls = [recs[:, k] for k in range(4)]
+            balls = list(record_loads_angles(recs))
         else:
             balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
     labels = motion_labels(m, realism)
