@@ -53,12 +53,10 @@ def _zeros_like(H, psi):
     return jnp.zeros_like(psi) if H is None else H
 
 
-def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, contacts=False):
+def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
     """The lean ball solve: (X1, X2, G, H, its closure for the ball state, the linearised (G, H)
     after every step stacked (iterations, ...) with ``record`` (else None), (A1, A2, H_outer,
-    H_inner), the linearised :func:`bearingsim.balls.contact_record` with ``contacts`` (else
-    None)) after ``iterations`` steps.  Every quantity is linearised about the last iterate:
-    q + (dq/dX) d for the last step d (second-order error, like the loads)."""
+    H_inner)) after ``iterations`` steps; (G, H) are linearised about the last iterate."""
     Ho, Hi = _zeros_like(H_outer, psi), _zeros_like(H_inner, psi)
     A1, A2 = groove_centre_offsets(bearing, q, psi)
     _, rL = norm2(A1, A2)
@@ -73,10 +71,7 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, co
 
     def f(X1, X2):
         st = state(X1, X2)
-        lin = (st.ball_G, st.ball_H)
-        if contacts:        # the same contacts as st's (XLA merges the two evaluations)
-            lin = lin + (contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi),)
-        return (st.r_axial, st.r_radial), lin
+        return (st.r_axial, st.r_radial), (st.ball_G, st.ball_H)
 
     one, zero = jnp.ones_like(X1), jnp.zeros_like(X1)
     cap = 2e-3 * bearing.ball_diameter
@@ -103,7 +98,7 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, co
         out = linearised(lin[:2], t1[:2], t2[:2], d1, d2) if record else None
         return (X1, X2, lin, t1, t2, d1, d2), out
 
-    lin0 = (zero, zero) + ((jnp.zeros((RECORD_ROWS,) + zero.shape),) if contacts else ())
+    lin0 = (zero, zero)
     init = (X1, X2, lin0, lin0, lin0, zero, zero)
     n = max(int(iterations), 1)
     if record:
@@ -113,8 +108,7 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, co
         hist = None
     X1, X2, lin, t1, t2, d1, d2 = c
     lin = linearised(lin, t1, t2, d1, d2)
-    return (X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi),
-            lin[2] if contacts else None)
+    return X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi)
 
 
 def _ring_load(G, H, psi):
@@ -131,15 +125,14 @@ def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=N
     leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
     sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
     :class:`bearingsim.balls.BallState` at the last iterate instead; ``record``: their
-    (RECORD_ROWS, Z) record, :func:`bearingsim.balls.contact_record` linearised like the loads
-    from the last Newton step's own evaluation: no extra ball evaluation)."""
-    X1, X2, G, H, state, _, _, rec = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations,
-                                             False, contacts=record)
+    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`)."""
+    X1, X2, G, H, state, _, (A1, A2, Ho, Hi) = _newton(bearing, op, curve, q, psi, H_outer, H_inner,
+                                                      iterations, False)
     R = _ring_load(G, H, psi)
     if full_state:
         return R, state(X1, X2)
-    if record:
-        return R, rec
+    if record:      # the contacts alone (no kinematics, no arctangents) at the last iterate
+        return R, contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi)
     return R, G, H
 
 
