@@ -24,6 +24,8 @@ Memory stays bounded by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` 
 ``/time``     float64 (T,) s
 ``/labels``   compound (N,): index, healthy, fault_class (0-3), speed_rpm, radial_N, axial_N,
               spall_length_mm, spall_depth_mm, spall_center_deg (the item's defect, any class),
+              effective_depth_mm (the depth the simulation used: spall_depth_mm, or with
+              ``depth_rule = "pit"`` the effective depth of a round pit, :func:`pit_depths`),
               bpfo_Hz, ftf_Hz, shaft_Hz, bpfi_Hz, bsf_Hz, result (0 = ok),
               realism_seed, slip_percent, pass_jitter_percent (the std of the item's drawn
               pass-interval factors), speed_fluctuation_percent, noise_rms_m_s2
@@ -31,7 +33,8 @@ Memory stays bounded by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` 
 Root attributes ``bearingsim_version``, ``case_toml``, ``seed`` (and ``count``,
 ``sample_rate_Hz``, ``duration_s``, ``balls``, ``ball_iterations``, ``substeps``, ``scheme``).
 Items whose simulation failed keep a zero signal and a result code != 0
-(:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus ``nonfinite_signal``);
+(:data:`DatasetResult`: the codes of :mod:`bearingsim.dynamics` plus ``nonfinite_signal`` and
+``pit_contact``);
 nothing written is NaN.  ``/labels`` has the attributes ``field_units``, ``result_messages``
 and ``class_names`` (JSON objects).
 """
@@ -56,7 +59,7 @@ from .case.units import from_si, to_si
 from .errors import BearingsimError, InputError, ResultCode
 
 __all__ = ["CLASSES", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
-           "item_seeds", "make_dataset", "partial_path", "result_messages"]
+           "item_seeds", "make_dataset", "partial_path", "pit_depths", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
 LABEL_FIELDS: dict[str, tuple[str, str]] = {
@@ -68,6 +71,7 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "axial_N": ("<f8", "N"),
     "spall_length_mm": ("<f8", "mm"),
     "spall_depth_mm": ("<f8", "mm"),
+    "effective_depth_mm": ("<f8", "mm"),
     "spall_center_deg": ("<f8", "deg"),
     "bpfo_Hz": ("<f8", "Hz"),
     "ftf_Hz": ("<f8", "Hz"),
@@ -99,7 +103,10 @@ def _result_members():
     nonfinite = max(v[0] for _, v in members) + 1
     return members + [("nonfinite_signal", (nonfinite, "the simulated signal is not finite",
                                             "use more [dynamics] substeps; check the structural "
-                                            "parameters"))]
+                                            "parameters")),
+                      ("pit_contact", (nonfinite + 1, "the healthy quasi-static state at the pit (for its "
+                                       "effective depth, dataset.depth_rule = \"pit\") did not converge",
+                                       "narrow the [dataset] load and speed ranges"))]
 
 
 #: per-item result codes of a data set (``/labels`` field ``result``): the simulation codes of
@@ -251,6 +258,57 @@ def item_seeds(seed, n) -> np.ndarray:
                     dtype=np.uint32)
 
 
+def pit_depths(case, lab, chunk, slots, profile="rectangular"):
+    """(depth in m, ok) per item for ``[dataset] depth_rule = "pit"``: every fault item's defect
+    is a round EDM pit of diameter ``spall_length_mm`` and machined depth ``spall_depth_mm``
+    narrower than the ball's contact ellipse, and the simulation takes the depth that loses the
+    same Hertz load (:func:`bearingsim.realism.pit_depth_of_solution`: the ball keeps rolling on
+    the raceway beside the pit; the groove rule of the machined depth would let it drop by its
+    sag over the chord, ~w^2 / 4D, and its impacts grow with the square of the size).
+
+    Each item's healthy contact at its own speed and loads comes from one batched quasi-static
+    solve per ``chunk`` items (:func:`bearingsim.dynamics.quasi_static_batch` with depth-0
+    slots: the program the simulation compiles anyway), with ball 0 at the pit for an outer-race
+    pit and at the load-zone centre (azimuth 0: the radial load is along +x) for an inner-race or
+    ball pit.  ``ok`` is False where that state did not converge (the item is then flagged
+    ``pit_contact``); healthy items get 0."""
+    import jax
+    import jax.numpy as jnp
+
+    from .kinematics import Operation
+    from .realism import pit_depth_of_solution
+
+    b = case.bearing()
+    n = lab.size
+    loc = item_locations(lab)
+    w = to_si(lab["spall_length_mm"], "mm")
+    machined = to_si(lab["spall_depth_mm"], "mm")
+    center = to_si(lab["spall_center_deg"], "deg")
+    control = case.data["operation"]["raceway_control"]
+    out, ok = np.zeros(n), np.ones(n, bool)
+    faulty = np.flatnonzero(~lab["healthy"])
+    for k in range(0, faulty.size, chunk):
+        idx = faulty[k:k + chunk]
+        pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - idx.size)])
+        m = pad.size
+        one = jnp.ones(m)
+        op = Operation(jnp.asarray(2 * np.pi * lab["speed_rpm"][pad] / 60.0), control, one, one)
+        F = np.zeros((m, 5))
+        F[:, 0], F[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
+        th = np.where(loc[pad] == "outer", center[pad], 0.0)
+        zero = np.zeros(m)
+        slots_h = dynamics.defect_slots(loc[pad], zero, zero, zero, profile, slots)
+        sols = dynamics.quasi_static_batch(b, op, jnp.asarray(F), jnp.asarray(th), slots_h, case.hertz_method)
+        host = jax.tree_util.tree_map(np.asarray, sols)
+        for j, i in enumerate(idx):
+            if int(host.result[j]) != 0:
+                ok[i] = False
+                continue
+            sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
+            out[i] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
+    return out, ok
+
+
 def _run_settings(case, lab, extent, depth, center, profile, fs, params):
     """(ball Newton steps, substeps) for the whole data set: :func:`dynamics.batch_settings` on
     the extreme items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and
@@ -321,7 +379,7 @@ _CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent"
 
 
 def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
-                    duration, fs, seeds, it, sub, loc, slots):
+                    duration, fs, seeds, it, sub, loc, slots, pit_ok):
     m = idx.size
     pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
     res = dynamics.simulate_batch(
@@ -333,6 +391,7 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
     code = np.asarray(res.result)[:m].astype(np.int32)
     finite = np.all(np.isfinite(a), axis=1)
     code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
+    code = np.where(pit_ok[idx], code, int(DatasetResult.pit_contact))
     ok = code == 0
     jitter = np.array([r["pass_jitter_percent"] for r in res.realism[:m]])
     freq = {k: np.broadcast_to(np.asarray(getattr(res, k), float), (chunk,))[:m]
@@ -432,6 +491,10 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     extent = to_si(lab["spall_length_mm"], "mm") / np.array([radius[L] for L in loc])
     depth = to_si(lab["spall_depth_mm"], "mm")
     center = to_si(lab["spall_center_deg"], "deg")
+    pit_ok = np.ones(n, bool)
+    if ds.get("depth_rule", "machined") == "pit":
+        depth, pit_ok = pit_depths(case, lab, chunk, slots, profile)
+    lab["effective_depth_mm"] = from_si(depth, "mm")
     loads = np.zeros((n, 5))
     loads[:, 0] = lab["radial_N"]
     loads[:, 2] = lab["axial_N"]
@@ -459,7 +522,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
             for k in todo:
                 idx = order[k * chunk:(k + 1) * chunk]
                 out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
-                                      params, realism, duration, fs, seeds, it, sub, loc, slots)
+                                      params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok)
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
                 done += idx.size
                 bar.update(idx.size)

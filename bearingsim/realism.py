@@ -58,10 +58,14 @@ __all__ = [
     "CWRU_PASS_CV_MAX",
     "CWRU_PASS_JITTER_MAX",
     "Contact",
+    "PIT_LOCATIONS",
+    "contact_of",
     "contact_at",
     "PitDepth",
     "pit_load_fraction",
+    "pit_depth",
     "pit_effective_depth",
+    "pit_depth_of_solution",
     "unbridged_fraction",
     "pass_cv",
     "pass_factors",
@@ -99,27 +103,42 @@ def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
 
 
 class Contact(NamedTuple):
-    """Outer contact of the ball at a given azimuth in the healthy quasi-static state (SI)."""
+    """One contact of the ball at a given azimuth in the healthy quasi-static state (SI)."""
 
-    delta: float            # approach delta_o (m)
+    delta: float            # approach delta (m)
     a: float                # semi-axis across the track (m)
     b: float                # semi-axis along the track (m)
     Q: float                # load (N)
     alpha: float            # contact angle (rad)
-    offset: float           # contact centre to the groove bottom across the track, f_o D sin(alpha) (m)
+    offset: float           # contact centre to the groove bottom across the track, f D sin(alpha) (m)
 
 
-def contact_at(bearing, op, loads, center=0.0, hertz_method="exact") -> Contact:
-    """The outer contact of the ball placed at azimuth ``center`` in the healthy bearing."""
+#: where a pit sits: the outer or inner groove bottom, or a point of a ball's surface
+PIT_LOCATIONS = ("outer", "inner", "ball")
+
+
+def contact_of(sol, bearing, j, race="outer", centred=False) -> Contact:
+    """:class:`Contact` of ball ``j`` of the (single, host) quasi-static solution ``sol`` at its
+    ``race`` ("outer" or "inner") contact; ``offset`` is the contact centre's distance from the
+    groove bottom, ``f D |sin alpha|`` (0 with ``centred``: a pit on the ball, which meets the
+    contact on the ball's rolling circle)."""
+    if race not in ("outer", "inner"):
+        raise ValueError(f"race must be 'outer' or 'inner', got {race!r}")
+    get = lambda name: float(np.asarray(getattr(sol, f"{name}_{race}"))[j])  # noqa: E731
+    alpha = get("alpha")
+    f = float(bearing.f_outer if race == "outer" else bearing.f_inner)
+    offset = 0.0 if centred else f * float(bearing.ball_diameter) * abs(np.sin(alpha))
+    return Contact(get("delta"), get("a"), get("b"), get("Q"), alpha, offset)
+
+
+def contact_at(bearing, op, loads, center=0.0, hertz_method="exact", race="outer") -> Contact:
+    """The ``race`` contact of the ball placed at azimuth ``center`` in the healthy bearing."""
     from .jones import solve
 
     sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
     psi = np.asarray(sol.azimuth)
     j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
-    alpha = float(sol.alpha_outer[j])
-    r_groove = float(bearing.f_outer * bearing.ball_diameter)
-    return Contact(float(sol.delta_outer[j]), float(sol.a_outer[j]), float(sol.b_outer[j]),
-                   float(sol.Q_outer[j]), alpha, r_groove * abs(np.sin(alpha)))
+    return contact_of(sol, bearing, j, race)
 
 
 class PitDepth(NamedTuple):
@@ -128,31 +147,62 @@ class PitDepth(NamedTuple):
     depth: float            # effective depth H for the Jones model (m)
     load_fraction: float    # phi: ball load lost over the pit at the ball's approach
     sag: float              # the ball's sag over the pit chord, D/2 - sqrt(D^2/4 - w^2/4) (m)
-    contact: Contact        # the ball's healthy outer contact
+    contact: Contact        # the ball's healthy contact at the pit
+
+
+def pit_depth(contact: Contact, pit_diameter, machined_depth, ball_diameter) -> PitDepth:
+    """Effective depth of a round pit of ``pit_diameter`` (m) under the healthy ``contact``:
+    the pit removes the fraction phi of the contact's load (:func:`pit_load_fraction`, the pit
+    ``contact.offset`` away from the contact centre across the track) at its approach, which the
+    Jones model reproduces with the depth ``delta (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5),
+    capped by the ball's sag over the pit chord and by the machined depth."""
+    D, w = float(ball_diameter), float(pit_diameter)
+    sag = 0.5 * D - np.sqrt(max(0.0, 0.25 * D * D - 0.25 * w * w))
+    phi = min(1.0, pit_load_fraction(contact.a, contact.b, w, contact.offset)) if contact.a > 0 else 0.0
+    h = max(contact.delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
+    return PitDepth(float(min(h, sag, float(machined_depth))), phi, float(sag), contact)
 
 
 def pit_effective_depth(bearing, op, loads, pit_diameter, machined_depth, center=0.0,
-                        hertz_method="exact") -> PitDepth:
-    """Effective spall depth of a round pit of ``pit_diameter`` (m) centred at azimuth ``center``
-    at the bottom of the outer groove.
+                        hertz_method="exact", location="outer") -> PitDepth:
+    """Effective depth of a round EDM pit of ``pit_diameter`` (m), ``machined_depth`` deep, for
+    the Jones model.
 
-    The healthy quasi-static state with a ball at ``center`` gives that ball's outer approach
-    delta_o and contact ellipse (:func:`contact_at`); the pit removes the fraction phi of the
-    ball's load (:func:`pit_load_fraction`, the contact centre ``f_o D sin(alpha_o)`` away from
-    the groove bottom across the track) at that approach, which the Jones model reproduces with
-    the depth ``delta_o (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5).  The result never exceeds the
-    ball's sag over the pit chord (the rectangular profile of a full-width groove) nor the
-    machined depth.  Neglected: the pressure redistribution around the pit (the remaining
-    contact is not Hertzian) and the contact's entry/exit over the pit edges (the rectangular
-    profile switches at the pit edges).
+    ``location`` "outer" (default): the pit at the outer groove bottom at azimuth ``center``;
+    the healthy quasi-static state with a ball there gives that ball's outer approach and contact
+    ellipse (:func:`contact_at`), the contact centre ``f_o D sin(alpha_o)`` away from the groove
+    bottom.  "inner": the pit at the inner groove bottom, met by the ball at azimuth ``center``
+    (pass the load-zone centre: the pit turns with the shaft and its strongest impacts are
+    there); its inner contact, offset ``f_i D sin(alpha_i)``.  "ball": a pit on the ball's
+    rolling circle (no offset), met by the outer and the inner contact in turn: the mean of the
+    two effective depths (the engine carries one depth per pit; :class:`PitDepth` reports the
+    outer contact and the mean lost fraction).  The depth follows from :func:`pit_depth`.
+    Neglected: the pressure redistribution around the pit (the remaining contact is not
+    Hertzian) and the contact's entry/exit over the pit edges (the rectangular profile switches
+    at the pit edges).
     """
-    c = contact_at(bearing, op, loads, center, hertz_method)
+    from .jones import solve
+
+    if location not in PIT_LOCATIONS:
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
+    psi = np.asarray(sol.azimuth)
+    j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
+    return pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_depth)
+
+
+def pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_depth) -> PitDepth:
+    """:func:`pit_effective_depth` for ball ``j`` of a healthy (single, host) quasi-static
+    solution ``sol`` that is already at hand (the data sets solve their items in batches)."""
     D = float(bearing.ball_diameter)
-    w = float(pit_diameter)
-    sag = 0.5 * D - np.sqrt(max(0.0, 0.25 * D * D - 0.25 * w * w))
-    phi = min(1.0, pit_load_fraction(c.a, c.b, w, c.offset))
-    h = max(c.delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
-    return PitDepth(float(min(h, sag, float(machined_depth))), phi, float(sag), c)
+    if location in ("outer", "inner"):
+        return pit_depth(contact_of(sol, bearing, j, location), pit_diameter, machined_depth, D)
+    if location != "ball":
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    po = pit_depth(contact_of(sol, bearing, j, "outer", centred=True), pit_diameter, machined_depth, D)
+    pi = pit_depth(contact_of(sol, bearing, j, "inner", centred=True), pit_diameter, machined_depth, D)
+    return PitDepth(0.5 * (po.depth + pi.depth), 0.5 * (po.load_fraction + pi.load_fraction), po.sag,
+                    po.contact)
 
 
 # ------------------------------------------------------------------------------ variability

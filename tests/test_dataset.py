@@ -266,3 +266,40 @@ def test_realism_labels(tmp_path):
     assert len(set(L["realism_seed"])) == 6
     assert np.all(x[L["healthy"]].std(axis=1) == pytest.approx(0.7, rel=0.02))  # noise only
     assert np.all(L["pass_jitter_percent"] > 0)          # each item's own slip draws
+
+
+def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
+    """depth_rule = "pit": each fault item enters the simulation with the effective depth of a
+    round EDM pit at its own speed and loads.  Items at the calibrated CWRU operating point
+    (1797 rpm, 100 N radial, 43.7 N axial) with the 0.007 and 0.021 in pits get the depths that
+    docs/calibrate_cwru.py wrote into cases/cwru_6205_or007.toml and cwru_6205.toml (stage B,
+    4 significant digits: rel 1e-3); the batched healthy solve of the data set and the single
+    solve of realism.pit_effective_depth are independent routes to the same contact.  The
+    machined rule keeps the drawn depth."""
+    import h5py
+
+    from bearingsim.dataset import pit_depths, slots_of, draw_labels
+    from bearingsim.workflows import dataset_case
+
+    spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
+    for k, v in {"dataset.count": 2, "dataset.chunk": 2, "dataset.healthy_fraction": 0.0,
+                 "dataset.speed_rpm": [1797, 1797], "dataset.radial_N": [100, 100],
+                 "dataset.axial_N": [43.7, 43.7]}.items():
+        spec = spec.with_value(k, v)
+    lab = draw_labels(spec)
+    lab["spall_length_mm"] = [0.007 * 25.4, 0.021 * 25.4]
+    depth, ok = pit_depths(spec, lab, 2, slots_of(lab))
+    want = [load_case(ROOT / "cases" / n).spall().depth for n in ("cwru_6205_or007.toml", "cwru_6205.toml")]
+    assert ok.all()
+    np.testing.assert_allclose(depth, np.asarray(want, float), rtol=1e-3)
+    # end to end: the labels carry the effective depth, below the machined 0.2794 mm
+    spec = spec.with_value("dataset.duration_s", 0.02).with_value("dynamics.sample_rate_Hz", 12000)
+    dataset_case(spec, tmp_path / "pit.h5")
+    with h5py.File(tmp_path / "pit.h5") as f:
+        L = f["labels"][()]
+    assert np.all(L["result"] == 0)
+    assert np.all((L["effective_depth_mm"] > 0) & (L["effective_depth_mm"] < 1e-2 * L["spall_depth_mm"]))
+    dataset_case(spec.with_value("dataset.depth_rule", "machined"), tmp_path / "machined.h5")
+    with h5py.File(tmp_path / "machined.h5") as f:
+        L = f["labels"][()]
+    assert np.array_equal(L["effective_depth_mm"], L["spall_depth_mm"])

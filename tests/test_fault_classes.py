@@ -176,8 +176,9 @@ def test_four_class_dataset_labels(four_class_dataset):
         F = load_vector(axial=float(row["axial_N"]), radial_x=float(row["radial_N"]))
         sp = None
         if c:
+            # the depth the item was simulated with (the pit's effective depth, depth_rule "pit")
             sp = bs.Spall.from_length(b, np.deg2rad(row["spall_center_deg"]), row["spall_length_mm"] * 1e-3,
-                                      row["spall_depth_mm"] * 1e-3, spec.spall().profile, loc_of[c], 0)
+                                      row["effective_depth_mm"] * 1e-3, spec.spall().profile, loc_of[c], 0)
         sol = bs.solve(b, op, F, cage_angle=spec.cage_angle, spall=sp, hertz_method=spec.hertz_method)
         fq, _ = characteristic_frequencies(b, op, sol)
         for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
@@ -189,8 +190,10 @@ def test_four_class_dataset_labels(four_class_dataset):
     for k, order in (("bpfi_Hz", 5.4152), ("bsf_Hz", 4.7135 / 2)):
         got = lab[k] / lab["shaft_Hz"]
         assert np.all(np.abs(got / order - 1) < 0.01), f"{k} / shaft_Hz: expected ~{order}, got {got}"
-    # healthy items carry only the noise floor (0.686 m/s^2 RMS in the spec); every defect item
-    # rings at its impacts, well above it (measured 16-64 m/s^2 RMS)
+    # healthy items carry only the noise floor (the spec's noise_rms_m_s2, 0.71 m/s^2 RMS, less
+    # above the 6 kHz Nyquist frequency of this 12 kHz run); every defect item rings at its
+    # impacts, well above it (at least 4x the noise RMS)
+    noise = spec.dynamics_settings()["noise_rms"]
     rms = sig.astype(float).std(axis=1)
-    assert np.all(rms[h] < 1.0), f"healthy items: expected ~0.69 m/s^2 RMS (noise), got {rms[h]}"
-    assert np.all(rms[~h] > 5.0), f"defect items: expected RMS well above the noise, got {rms[~h]}"
+    assert np.all(rms[h] < 1.1 * noise), f"healthy items: expected <= {noise:.2f} m/s^2 RMS (noise), got {rms[h]}"
+    assert np.all(rms[~h] > 4.0 * noise), f"defect items: expected RMS well above the noise, got {rms[~h]}"

@@ -149,3 +149,36 @@ def test_calibrated_case_depths_are_the_pit_physics(name, inches):
     assert float(case.spall().depth) == pytest.approx(pit.depth, rel=1e-3)
     assert float(case.spall().length(b)) == pytest.approx(inches * INCH, rel=1e-9)
     assert rl.CWRU_PASS_CV_MAX >= 0.0 and 0.0 <= rl.CWRU_PASS_JITTER_MAX < 0.5
+
+
+def test_pit_depth_at_the_inner_race_and_on_a_ball(cwru):
+    """The inner-race pit takes the ball's inner contact (offset f_i D sin(alpha_i) from the
+    groove bottom), the ball pit both contacts centred (it meets them on the ball's rolling
+    circle) and their mean; each depth from pit_depth on the contact read independently from
+    the healthy Jones solution (bs.solve), and within the sag and the machined depth."""
+    import bearingsim as bs
+
+    bearing, op, loads = cwru
+    w, deep = 0.014 * INCH, 0.011 * INCH
+    sol = bs.solve(bearing, op, loads, cage_angle=0.0)
+    D, fi = float(bearing.ball_diameter), float(bearing.f_inner)
+    ai = float(sol.alpha_inner[0])
+    ci = rl.Contact(float(sol.delta_inner[0]), float(sol.a_inner[0]), float(sol.b_inner[0]),
+                    float(sol.Q_inner[0]), ai, fi * D * abs(np.sin(ai)))
+    inner = rl.pit_effective_depth(bearing, op, loads, w, deep, 0.0, location="inner")
+    assert inner.depth == pytest.approx(rl.pit_depth(ci, w, deep, D).depth, rel=1e-12)
+    assert 0.0 < inner.depth <= min(inner.sag, deep) and inner.contact.offset > 0.0
+    co = rl.Contact(float(sol.delta_outer[0]), float(sol.a_outer[0]), float(sol.b_outer[0]),
+                    float(sol.Q_outer[0]), float(sol.alpha_outer[0]), 0.0)
+    ball = rl.pit_effective_depth(bearing, op, loads, w, deep, 0.0, location="ball")
+    both = [rl.pit_depth(c, w, deep, D).depth for c in (co, ci._replace(offset=0.0))]
+    assert ball.depth == pytest.approx(np.mean(both), rel=1e-12)
+    assert both[0] != both[1]          # the two contacts differ (conformity, load): a real mean
+    with pytest.raises(ValueError, match="location"):
+        rl.pit_effective_depth(bearing, op, loads, w, deep, location="cage")
+
+
+def test_pit_depth_of_an_unloaded_contact_is_zero():
+    """A contact without load (a = 0, delta <= 0) loses nothing over a pit."""
+    c = rl.Contact(-1e-7, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert rl.pit_depth(c, 0.2e-3, 0.3e-3, 8e-3).depth == 0.0

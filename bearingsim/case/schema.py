@@ -373,6 +373,13 @@ SCHEMA: dict[str, Section] = {
             "chunk": _int("items simulated together (vmap); memory and speed trade-off", 16, ge=1),
             "healthy_fraction": _num("fraction of healthy items (spall depth and length 0)", "",
                                      0.2, ge=0, le=1),
+            "depth_rule": _enum("how an item's drawn depth enters the contact: machined (the depth "
+                                "itself, with the [defect] profile: a groove across the track, the "
+                                "ball drops by its sag over the chord) or pit (a round EDM pit of "
+                                "diameter spall_length_mm narrower than the contact: the depth that "
+                                "loses the Hertz load over the pit's area at the item's own speed and "
+                                "loads, bearingsim.realism; label effective_depth_mm)",
+                                ("machined", "pit"), "machined"),
             "speed_rpm": _range("inner-ring speed range", "rpm", _fixed_from("operation", "speed_rpm"),
                                 "[operation.speed_rpm, operation.speed_rpm]", gt=0),
             "radial_N": _range("radial load range, along +x (the load zone is centred at azimuth 0)",

@@ -32,7 +32,8 @@ from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
 # ------------------------------------------------------------------------- entry points
 from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, simulate,
                        simulate_case, spin_ratio)
-from .batch import DynamicsBatchResult, batch_settings, defect_slots, extreme_items, simulate_batch
+from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
+                    simulate_batch)
 
 #: former names (outer-spall era): the times a ball meets a defect's edges / centre
 spall_edge_times = defect_edge_times
@@ -47,5 +48,6 @@ __all__ = [
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
-    "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "simulate_batch",
+    "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
+    "simulate_batch",
 ]

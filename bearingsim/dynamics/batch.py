@@ -28,7 +28,8 @@ from .motion import defect_edge_times, draw_motion, motion_at, motion_labels, se
 from .parameters import RESULTS, DynamicsParameters, Realism
 from .simulate import characteristic_frequencies, rectangular, slip_reference, spin_ratio
 
-__all__ = ["DynamicsBatchResult", "defect_slots", "extreme_items", "batch_settings", "simulate_batch"]
+__all__ = ["DynamicsBatchResult", "defect_slots", "extreme_items", "batch_settings", "quasi_static_batch",
+           "simulate_batch"]
 
 
 class DynamicsBatchResult(NamedTuple):
@@ -93,6 +94,29 @@ def _qs_batch(bearing, op, loads, theta0, defects, hertz_method, speed_steps):
 
 
 _qs_batch_jit = jit(_qs_batch)
+
+
+def quasi_static_batch(bearing, op, loads, theta0, defects, hertz_method="exact"):
+    """The items' quasi-static states (a batched :class:`bearingsim.JonesSolution`, ``result``
+    per item): ``op`` with (N,) speeds, ``loads`` (N, 5), ``theta0`` (N,) cage angles,
+    ``defects`` the slots of :func:`defect_slots` (batched arrays).  Items that fail are retried
+    once with 8 speed stages (only them).  The program is the one :func:`simulate_batch` uses
+    (same shapes, same program: a healthy solve of a data set's items with depth-0 slots costs no
+    compilation)."""
+    sols = _qs_batch_jit(bearing, op, loads, theta0, defects, hertz_method, 1)
+    bad = np.flatnonzero(np.asarray(sols.result) != 0)
+    if bad.size:    # retry those with 8 speed stages (only them)
+        idx = jnp.asarray(bad)
+        retry = _qs_batch_jit(bearing, _take(op, idx), loads[idx], theta0[idx], _take(defects, idx),
+                              hertz_method, 8)
+        take = jnp.asarray(np.asarray(retry.result) == 0)
+
+        def merge(a, r):
+            mk = take.reshape(take.shape + (1,) * (r.ndim - 1))
+            return a.at[idx].set(jnp.where(mk, r, a[idx]))
+
+        sols = jax.tree_util.tree_map(merge, sols, retry)
+    return sols
 _init_batch_jit = jit(jax.vmap(initial_state))
 
 
@@ -161,19 +185,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
                 subs.append(s_i)
         ball_iterations = ball_iterations or next_iterations(its)
         substeps = substeps or max(subs, default=1)
-    sols = _qs_batch_jit(bearing, op, loads, th, defects, hertz_method, 1)
-    bad = np.flatnonzero(np.asarray(sols.result) != 0)
-    if bad.size:    # retry those with 8 speed stages (only them)
-        idx = jnp.asarray(bad)
-        retry = _qs_batch_jit(bearing, _take(op, idx), loads[idx], th[idx], _take(defects, idx),
-                              hertz_method, 8)
-        take = jnp.asarray(np.asarray(retry.result) == 0)
-
-        def merge(a, r):
-            mk = take.reshape(take.shape + (1,) * (r.ndim - 1))
-            return a.at[idx].set(jnp.where(mk, r, a[idx]))
-
-        sols = jax.tree_util.tree_map(merge, sols, retry)
+    sols = quasi_static_batch(bearing, op, loads, th, defects, hertz_method)
     freqs, a_m = characteristic_frequencies(bearing, op, sols)
     k_spin = spin_ratio(bearing, a_m)
     curve = stiffness_curve(bearing, hertz_method)
