@@ -6,6 +6,8 @@ Usage (from the repository root; the real records are read from ../shared/realda
     .venv/bin/python docs/calibrate_cwru.py             # fit, check, print the table
     .venv/bin/python docs/calibrate_cwru.py --write     # ... and write the values into
                                                         # cases/cwru_6205.toml, cwru_6205_or007.toml
+                                                        # (the inner/ball twins and the data set
+                                                        # specs share its structure)
 
 Every calibrated value comes from a stage below (docs/realism.md explains the physics):
 
@@ -360,6 +362,7 @@ def print_table(rows):
 
 
 TWINS = (REPO / "cases" / "cwru_6205_inner.toml", REPO / "cases" / "cwru_6205_ball.toml")
+DATASETS = (REPO / "cases" / "dataset_cwru.toml", REPO / "cases" / "dataset_cwru_4class.toml")
 
 
 def _block(text, name):
@@ -399,6 +402,16 @@ def write_values(depths, modes, cv_max, jit_max, noise_rms, noise_band, slip, ax
         })
         log(f"    wrote {path.relative_to(REPO)}")
     sync_twins()
+    for path in DATASETS:   # the data set specs share the calibrated structure, slip and noise
+        write_case(path, {
+            ("dynamics", "resonance_frequencies_Hz"): (fmt_list(fk, 5), ""),
+            ("dynamics", "resonance_damping_ratios"): (fmt_list(zk, 4), ""),
+            ("dynamics", "resonance_gains"): (fmt_list(gk, 4), ""),
+            ("dynamics", "slip_percent"): (f"{slip:g}", ""),
+            ("dynamics", "noise_rms_m_s2"): (f"{noise_rms:.4g}", ""),
+            ("dynamics", "noise_band_Hz"): (fmt_list(noise_band, 4), ""),
+        })
+        log(f"    wrote {path.relative_to(REPO)} ([dynamics] structure, slip, noise)")
     p = REPO / "bearingsim" / "realism.py"
     text = p.read_text()
     text = re.sub(r"^CWRU_PASS_CV_MAX = .*$", f"CWRU_PASS_CV_MAX = {cv_max:.4g}", text, count=1, flags=re.M)

@@ -303,3 +303,18 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
     with h5py.File(tmp_path / "machined.h5") as f:
         L = f["labels"][()]
     assert np.array_equal(L["effective_depth_mm"], L["spall_depth_mm"])
+
+
+@pytest.mark.parametrize("name", ["dataset_cwru.toml", "dataset_cwru_4class.toml"])
+def test_shipped_specs_share_the_calibrated_structure(name):
+    """The CWRU data set specs carry the calibrated sensor modes, contact damping, slip, noise,
+    geometry and clearance of cases/cwru_6205.toml (docs/calibrate_cwru.py --write keeps them in
+    step) and the pit depth rule."""
+    spec, cal = load_case(ROOT / "cases" / name), load_case(ROOT / "cases" / "cwru_6205.toml")
+    a, b = spec.dynamics_settings(), cal.dynamics_settings()
+    for k in ("resonance_frequencies", "resonance_damping_ratios", "resonance_gains", "noise_band"):
+        assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), k
+    for k in ("contact_damping_ratio", "slip_percent", "speed_fluctuation_percent", "noise_rms"):
+        assert a[k] == b[k], k
+    assert spec.data["bearing"] == cal.data["bearing"]
+    assert spec.data["dataset"]["depth_rule"] == "pit"
