@@ -46,6 +46,7 @@ __all__ = [
     "ball_equations",
     "ball_state",
     "contact_record",
+    "ball_balance",
     "orbital_speed",
     "static_ball_position",
     "ball_newton_step",
@@ -222,6 +223,16 @@ def contact_record(bearing, curve, x, A1, A2, H_outer=0.0, H_inner=0.0):
     alpha = arctan2(sin, cos))."""
     c = _contacts(bearing, curve, x[0], x[1], A1, A2, H_outer, H_inner)
     return jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
+
+
+def ball_balance(bearing, op: Operation, x, A1, A2, curve, H_outer=0.0, H_inner=0.0, carried_speed=None):
+    """One plain evaluation of a ball centred at x = (X1, X2) (m): its equilibrium residuals
+    (r_axial, r_radial) (N), its loads (G, H) on the inner ring (N) and its contact record
+    (:func:`contact_record`, stacked on a leading axis), all from the same contacts -- what the
+    dynamics' chord step needs (no derivatives, no arctangents)."""
+    c = _contacts(bearing, curve, x[0], x[1], A1, A2, H_outer, H_inner)
+    r1, r2, G, H, *_ = _forces(bearing, op, c, H_outer, H_inner, carried_speed)
+    return r1, r2, G, H, jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
 
 
 def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_inner=0.0):
