@@ -89,3 +89,26 @@ def test_chord_loads_match_the_converged_solve(trajectory):
     assert err_q[full].max() <= ITER_TOL, msg
     assert 0.0 < float(bc.worst) <= dyn.CHORD_TOL
     assert np.all(full[edge])                                       # every defect edge in full
+
+
+def test_ball_balance_is_ball_state():
+    """balls.ball_balance (both contacts as one stacked array) gives the residuals, loads and
+    contact directions of balls.ball_state to round-off, dropped and carried balls included."""
+    c = load_case("cwru_6205")
+    b, op = c.bearing(), c.operation()
+    curve = bs.hertz.stiffness_curve(b)
+    q = bs.solve(b, op, c.loads(), spall=c.spall()).displacement
+    A1, A2 = bs.balls.groove_centre_offsets(b, q, b.ball_azimuths(0.3))
+    x0, _ = bs.balls.static_ball_position(b, op, A1, A2, curve)
+    rng = np.random.default_rng(0)
+    X = x0 + rng.normal(0.0, 2e-7, x0.shape)
+    Ho = jnp.asarray(rng.uniform(0.0, 3e-6, 9) * (rng.uniform(size=9) > 0.5))
+    ws = jnp.full(9, 80.0)
+    r1, r2, G, H, rec = bs.balls.ball_balance(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
+    st = bs.balls.ball_state(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
+    scale = float(jnp.max(st.Q_outer))
+    for got, want in ((r1, st.r_axial), (r2, st.r_radial), (G, st.ball_G), (H, st.ball_H), (rec[0], st.Q_inner),
+                      (rec[1], st.Q_outer)):
+        assert float(jnp.max(jnp.abs(got - want))) <= 1e-13 * scale
+    for k, a in ((2, st.alpha_inner), (4, st.alpha_outer)):
+        assert float(jnp.max(jnp.abs(jnp.arctan2(rec[k], rec[k + 1]) - a))) <= 1e-14

@@ -21,7 +21,8 @@ from jax import lax
 
 from typing import NamedTuple
 
-from ..balls import ball_balance, ball_state, contact_record, groove_centre_offsets, static_ball_position
+from ..balls import (ball_balance, ball_state, contact_record, groove_centre_offsets, groove_centre_offsets_cs,
+                     static_ball_position)
 from ..defect import advance, as_defects, contact_depths
 from ..fastmath import norm2, recip
 from ..kinematics import Operation, ball_kinematics_cs
@@ -196,10 +197,26 @@ def _sensitivity(bearing, X1, X2, A1, A2, Ho, Hi):
     return A1 * rL, A2 * rL, along, across
 
 
+def _azimuth_sin_cos(psi):
+    """(sin psi, cos psi) of the ball azimuths psi (Z,), psi_j = theta + 2 pi j / Z
+    (:meth:`bearingsim.Bearing.ball_azimuths`), from those of theta = psi_0 by the
+    angle-addition formulas as a small matrix product with constant rotations: XLA's CPU backend
+    keeps a dot out of its loop fusions, so the products are computed once, where the sines and
+    cosines themselves would be recomputed in every kernel that reads them (~15 per time step).
+    Equal to jnp.sin / jnp.cos of psi to round-off."""
+    Z = psi.shape[-1]
+    d = 2.0 * np.pi / Z * np.arange(Z)
+    rot = jnp.asarray(np.stack([np.stack([np.cos(d), np.sin(d)], -1), np.stack([-np.sin(d), np.cos(d)], -1)], -2))
+    th = psi[..., :1]
+    out = jnp.einsum("zij,...j->...zi", rot, jnp.concatenate([jnp.sin(th), jnp.cos(th)], -1))
+    return out[..., 0], out[..., 1]
+
+
 def _chord(bearing, op, curve, q, psi, Ho, Hi, bc: BallCarry, tol):
     """One chord step from the carried state: (R, record, X1, X2, A1, A2, accepted, residual
     ratio)."""
-    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    sp, cp = _azimuth_sin_cos(psi)
+    A1, A2 = groove_centre_offsets_cs(bearing, q, sp, cp)
     ws = None
     if Ho is not None or Hi is not None:        # the undropped orbital speed, as in _newton
         _, rL = norm2(A1, A2)
@@ -228,7 +245,8 @@ def _chord(bearing, op, curve, q, psi, Ho, Hi, bc: BallCarry, tol):
     ok = (jnp.isfinite(ratio) & (ratio <= tol) & (moved <= CHORD_XTOL * bearing.ball_diameter)
           & jnp.all(jnp.isfinite(X1) & jnp.isfinite(X2)))
     # the next prediction's base: that correction (free: the residuals are at hand)
-    return _ring_load(G, H, psi), rec, X1 - e1, X2 - e2, A1, A2, ok, ratio
+    R = jnp.stack([jnp.sum(H * cp, -1), jnp.sum(H * sp, -1), jnp.sum(G, -1)], -1)
+    return R, rec, X1 - e1, X2 - e2, A1, A2, ok, ratio
 
 
 def bearing_force_chord(bearing, op: Operation, curve, q, psi, H_outer, H_inner, iterations, carry: BallCarry,
