@@ -56,14 +56,15 @@ def _zeros_like(H, psi):
     return jnp.zeros_like(psi) if H is None else H
 
 
-def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, jacobian=False):
+def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, jacobian=False, even=False):
     """The lean ball solve: (X1, X2, G, H, its closure for the ball state, the linearised (G, H)
     after every step stacked (iterations, ...) with ``record`` (else None), (A1, A2, H_outer,
     H_inner, the undropped orbital speed[, the last step's regularised inverse Jacobian (i11,
     i12, i21, i22) with ``jacobian``])) after ``iterations`` steps; (G, H) are linearised about
-    the last iterate."""
+    the last iterate.  ``even``: psi are a bearing's azimuths theta + 2 pi j / Z (their sines and
+    cosines by :func:`_azimuth_sin_cos`)."""
     Ho, Hi = _zeros_like(H_outer, psi), _zeros_like(H_inner, psi)
-    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    A1, A2 = groove_centre_offsets_cs(bearing, q, *_azimuth_sin_cos(psi)) if even else groove_centre_offsets(bearing, q, psi)
     _, rL = norm2(A1, A2)
     s, c = A1 * rL, A2 * rL
     # undropped closed-form orbital speed: collinear contacts along (A1, A2)
@@ -117,13 +118,13 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, ja
     return X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi, ws) + tuple(c[7:])
 
 
-def _ring_load(G, H, psi):
-    cp, sp = jnp.cos(psi), jnp.sin(psi)
+def _ring_load(G, H, psi, even=False):
+    sp, cp = _azimuth_sin_cos(psi) if even else (jnp.sin(psi), jnp.cos(psi))
     return jnp.stack([jnp.sum(H * cp, -1), jnp.sum(H * sp, -1), jnp.sum(G, -1)], -1)
 
 
 def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None, iterations=1,
-                  full_state=False, record=False):
+                  full_state=False, record=False, even_azimuths=False):
     """Load [Fx, Fy, Fz] (N) the balls carry at ring displacement q (5,) and azimuths psi (Z,),
     each ball solved from the omega = 0 closed form by ``iterations`` Newton steps (exact
     Jacobian), its loads linearised about the last iterate.  ``H_outer``/``H_inner``: defect
@@ -131,10 +132,12 @@ def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=N
     leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
     sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
     :class:`bearingsim.balls.BallState` at the last iterate instead; ``record``: their
-    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`)."""
+    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`).  ``even_azimuths``:
+    psi are :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z), whose sines and cosines
+    are then taken from theta's (the values to round-off, fewer kernels in a time step)."""
     X1, X2, G, H, state, _, (A1, A2, Ho, Hi, _) = _newton(bearing, op, curve, q, psi, H_outer, H_inner,
-                                                      iterations, False)
-    R = _ring_load(G, H, psi)
+                                                      iterations, False, even=even_azimuths)
+    R = _ring_load(G, H, psi, even_azimuths)
     if full_state:
         return R, state(X1, X2)
     if record:      # the contacts alone (no kinematics, no arctangents) at the last iterate
@@ -253,6 +256,8 @@ def bearing_force_chord(bearing, op: Operation, curve, q, psi, H_outer, H_inner,
                         refresh, tol=CHORD_TOL):
     """:func:`bearing_force` with ``record=True`` for a time loop that carries the balls'
     positions (``carry``, a :class:`BallCarry`): returns (R, record (RECORD_ROWS, Z), new carry).
+    ``psi``: :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z; their sines and cosines
+    are taken from theta's).
 
     One plain evaluation of the ball equations (:func:`bearingsim.balls.ball_balance`) at
     positions predicted from the last step's equilibria (moved with the change of the
@@ -271,11 +276,11 @@ def bearing_force_chord(bearing, op: Operation, curve, q, psi, H_outer, H_inner,
 
     def full():
         X1, X2, G, H, _, _, ex = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, False,
-                                         jacobian=True)
+                                         jacobian=True, even=True)
         A1, A2, Ho, Hi = ex[:4]
         rec = contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi)
         sens = _sensitivity(bearing, X1, X2, A1, A2, Ho, Hi)
-        return _ring_load(G, H, psi), rec, X1, X2, A1, A2, tuple(ex[5:9]), sens
+        return _ring_load(G, H, psi, True), rec, X1, X2, A1, A2, tuple(ex[5:9]), sens
 
     def chord():
         return R_c, rec_c, X1c, X2c, A1c, A2c, carry.inv, carry.sens

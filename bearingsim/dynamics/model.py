@@ -82,7 +82,8 @@ class DynamicModel(eqx.Module):
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state)
+        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state,
+                            even_azimuths=True)
         return (out[0], out[1]) if full_state else out[0]
 
     def ring_load_chord(self, xrel, stage, carry: BallCarry, refresh):
