@@ -33,7 +33,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .fastmath import norm2, pow15, recip, safe_div
+from .fastmath import clamp, norm2, pow15, recip, safe_div
 from .hertz import power_eval
 from .kinematics import Operation, ball_kinematics_cs
 
@@ -42,10 +42,12 @@ __all__ = [
     "KN",
     "BallState",
     "groove_centre_offsets",
+    "groove_centre_offsets_cs",
     "offset_jacobian",
     "ball_equations",
     "ball_state",
     "contact_record",
+    "ball_balance",
     "orbital_speed",
     "static_ball_position",
     "ball_newton_step",
@@ -89,10 +91,15 @@ class BallState(NamedTuple):
 def groove_centre_offsets(bearing, q, psi):
     """(A1, A2): axial and radial distance from the outer to the inner groove-curvature centre
     of the ball at azimuth psi, for ring displacement q = [dx, dy, dz, theta_x, theta_y]."""
+    return groove_centre_offsets_cs(bearing, q, jnp.sin(psi), jnp.cos(psi))
+
+
+def groove_centre_offsets_cs(bearing, q, sin_psi, cos_psi):
+    """:func:`groove_centre_offsets` from the azimuths' sines and cosines."""
     BD = bearing.A
     a0 = bearing.free_contact_angle
     Ri = bearing.inner_groove_radius
-    s, c = jnp.sin(psi), jnp.cos(psi)
+    s, c = sin_psi, cos_psi
     A1 = BD * jnp.sin(a0) + q[2] + Ri * (q[3] * s - q[4] * c)
     A2 = BD * jnp.cos(a0) + q[0] * c + q[1] * s
     return A1, A2
@@ -222,6 +229,39 @@ def contact_record(bearing, curve, x, A1, A2, H_outer=0.0, H_inner=0.0):
     alpha = arctan2(sin, cos))."""
     c = _contacts(bearing, curve, x[0], x[1], A1, A2, H_outer, H_inner)
     return jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
+
+
+def _contacts_stacked(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
+    """:func:`_contacts` with the outer and the inner contact stacked on a leading axis (2, ...):
+    the same operations per element (the same values), but one square root, one division and
+    one ``delta**1.5`` for both contacts -- each of them is a kernel of its own in a compiled
+    time step (XLA does not duplicate them into their consumers)."""
+    D = bearing.ball_diameter
+    z = jnp.zeros_like(X1 + A1)
+    L, rL = norm2(jnp.stack([X1 + z, A1 - X1]), jnp.stack([X2 + z, A2 - X2]))
+    sn, cs = jnp.stack([X1 + z, A1 - X1]) * rL, jnp.stack([X2 + z, A2 - X2]) * rL
+    free = jnp.stack([(bearing.f_outer - 0.5) * D + H_outer + z, (bearing.f_inner - 0.5) * D + H_inner + z])
+    delta = L - free
+    # K(alpha) of each contact: power_eval's Horner with the row's own coefficients
+    coeffs = jnp.stack([curve.outer_power, curve.inner_power])
+    x = clamp(cs, -1.0, 1.0)
+    sh = (2,) + (1,) * (x.ndim - 1)
+    K = jnp.reshape(coeffs[:, -1], sh) + jnp.zeros_like(x)
+    for k in range(coeffs.shape[-1] - 2, -1, -1):
+        K = K * x + jnp.reshape(coeffs[:, k], sh)
+    Q = K * _pow15((delta > 0.0) & (cs > 0.0), delta)
+    return _Contacts(sn[0], cs[0], sn[1], cs[1], delta[1], delta[0], K[1], K[0], Q[1], Q[0])
+
+
+def ball_balance(bearing, op: Operation, x, A1, A2, curve, H_outer=0.0, H_inner=0.0, carried_speed=None):
+    """One plain evaluation of a ball centred at x = (X1, X2) (m): its equilibrium residuals
+    (r_axial, r_radial) (N), its loads (G, H) on the inner ring (N) and its contact record
+    (:func:`contact_record`, stacked on a leading axis), all from the same contacts -- what the
+    dynamics' chord step needs (no derivatives, no arctangents; both contacts evaluated as one
+    stacked array, the values of :func:`ball_state`)."""
+    c = _contacts_stacked(bearing, curve, x[0], x[1], A1, A2, H_outer, H_inner)
+    r1, r2, G, H, *_ = _forces(bearing, op, c, H_outer, H_inner, carried_speed)
+    return r1, r2, G, H, jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
 
 
 def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_inner=0.0):

@@ -5,7 +5,8 @@ exactly afterwards.  One concept per module:
 =====================  ==========================================================================
 ``parameters``         result codes, structural parameters, realism ingredients
 ``motion``             the drawn cage / shaft motion (slip, speed fluctuation) and defect timings
-``ball_force``         the lean ball solve of the right-hand side, and its step-count check
+``ball_force``         the lean ball solve of the right-hand side (full, or the chord method from
+                       the previous step's balls), and its step-count check
 ``model``              the shaft/housing equations, their equilibrium at t = 0, linear modes
 ``integrate``          fixed-step chunked time loop (and the adaptive diffrax reference)
 ``simulate``           one simulation: :func:`simulate`, :class:`DynamicsResult`
@@ -20,8 +21,9 @@ from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase,
                      motion_at, motion_labels, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
-from .ball_force import (ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, ball_errors, bearing_force,
-                         bearing_force_history, choose_ball_iterations, next_iterations, record_loads_angles)
+from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, BallCarry, ball_errors,
+                         bearing_force, bearing_force_chord, bearing_force_history, choose_ball_iterations,
+                         initial_ball_carry, next_iterations, record_loads_angles)
 
 # -------------------------------------------------------------------------------- model
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
@@ -45,6 +47,7 @@ __all__ = [
     "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
     "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
+    "CHORD_TOL", "BallCarry", "initial_ball_carry", "bearing_force_chord",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",

@@ -19,13 +19,16 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from ..balls import ball_state, contact_record, groove_centre_offsets, static_ball_position
+from typing import NamedTuple
+
+from ..balls import (ball_balance, ball_state, contact_record, groove_centre_offsets, groove_centre_offsets_cs,
+                     static_ball_position)
 from ..defect import advance, as_defects, contact_depths
 from ..fastmath import norm2, recip
 from ..kinematics import Operation, ball_kinematics_cs
 from ..xla import jit
 
-__all__ = ["bearing_force", "bearing_force_history", "RECORD_ROWS", "record_loads_angles", "ball_errors", "choose_ball_iterations",
+__all__ = ["bearing_force", "BallCarry", "initial_ball_carry", "bearing_force_chord", "CHORD_TOL", "bearing_force_history", "RECORD_ROWS", "record_loads_angles", "ball_errors", "choose_ball_iterations",
            "next_iterations", "ITER_CHOICES", "ITER_TOL", "REF_ITERATIONS", "REF_TOL"]
 
 #: Newton step counts the lean ball solver is checked with (a ball dropping into a deep spall at
@@ -53,12 +56,15 @@ def _zeros_like(H, psi):
     return jnp.zeros_like(psi) if H is None else H
 
 
-def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
+def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, jacobian=False, even=False):
     """The lean ball solve: (X1, X2, G, H, its closure for the ball state, the linearised (G, H)
     after every step stacked (iterations, ...) with ``record`` (else None), (A1, A2, H_outer,
-    H_inner)) after ``iterations`` steps; (G, H) are linearised about the last iterate."""
+    H_inner, the undropped orbital speed[, the last step's regularised inverse Jacobian (i11,
+    i12, i21, i22) with ``jacobian``])) after ``iterations`` steps; (G, H) are linearised about
+    the last iterate.  ``even``: psi are a bearing's azimuths theta + 2 pi j / Z (their sines and
+    cosines by :func:`_azimuth_sin_cos`)."""
     Ho, Hi = _zeros_like(H_outer, psi), _zeros_like(H_inner, psi)
-    A1, A2 = groove_centre_offsets(bearing, q, psi)
+    A1, A2 = groove_centre_offsets_cs(bearing, q, *_azimuth_sin_cos(psi)) if even else groove_centre_offsets(bearing, q, psi)
     _, rL = norm2(A1, A2)
     s, c = A1 * rL, A2 * rL
     # undropped closed-form orbital speed: collinear contacts along (A1, A2)
@@ -96,28 +102,29 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record):
         ok = jnp.isfinite(d1) & jnp.isfinite(d2)
         d1, d2 = jnp.where(ok, d1 * k, 0.0), jnp.where(ok, d2 * k, 0.0)
         out = linearised(lin[:2], t1[:2], t2[:2], d1, d2) if record else None
-        return (X1, X2, lin, t1, t2, d1, d2), out
+        inv = (b22 * idet, -a12 * idet, -a21 * idet, b11 * idet) if jacobian else ()
+        return (X1, X2, lin, t1, t2, d1, d2) + inv, out
 
     lin0 = (zero, zero)
-    init = (X1, X2, lin0, lin0, lin0, zero, zero)
+    init = (X1, X2, lin0, lin0, lin0, zero, zero) + ((zero,) * 4 if jacobian else ())
     n = max(int(iterations), 1)
     if record:
         c, hist = lax.scan(newton, init, None, length=n)
     else:
         c = lax.fori_loop(0, n, lambda _, c: newton(c, None)[0], init)
         hist = None
-    X1, X2, lin, t1, t2, d1, d2 = c
+    X1, X2, lin, t1, t2, d1, d2 = c[:7]
     lin = linearised(lin, t1, t2, d1, d2)
-    return X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi)
+    return X1 + d1, X2 + d2, lin[0], lin[1], state, hist, (A1, A2, Ho, Hi, ws) + tuple(c[7:])
 
 
-def _ring_load(G, H, psi):
-    cp, sp = jnp.cos(psi), jnp.sin(psi)
+def _ring_load(G, H, psi, even=False):
+    sp, cp = _azimuth_sin_cos(psi) if even else (jnp.sin(psi), jnp.cos(psi))
     return jnp.stack([jnp.sum(H * cp, -1), jnp.sum(H * sp, -1), jnp.sum(G, -1)], -1)
 
 
 def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None, iterations=1,
-                  full_state=False, record=False):
+                  full_state=False, record=False, even_azimuths=False):
     """Load [Fx, Fy, Fz] (N) the balls carry at ring displacement q (5,) and azimuths psi (Z,),
     each ball solved from the omega = 0 closed form by ``iterations`` Newton steps (exact
     Jacobian), its loads linearised about the last iterate.  ``H_outer``/``H_inner``: defect
@@ -125,15 +132,164 @@ def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=N
     leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
     sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
     :class:`bearingsim.balls.BallState` at the last iterate instead; ``record``: their
-    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`)."""
-    X1, X2, G, H, state, _, (A1, A2, Ho, Hi) = _newton(bearing, op, curve, q, psi, H_outer, H_inner,
-                                                      iterations, False)
-    R = _ring_load(G, H, psi)
+    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`).  ``even_azimuths``:
+    psi are :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z), whose sines and cosines
+    are then taken from theta's (the values to round-off, fewer kernels in a time step)."""
+    X1, X2, G, H, state, _, (A1, A2, Ho, Hi, _) = _newton(bearing, op, curve, q, psi, H_outer, H_inner,
+                                                      iterations, False, even=even_azimuths)
+    R = _ring_load(G, H, psi, even_azimuths)
     if full_state:
         return R, state(X1, X2)
     if record:      # the contacts alone (no kinematics, no arctangents) at the last iterate
         return R, contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi)
     return R, G, H
+
+
+#: a chord step is accepted when its balls' equilibrium residuals at the reported position are
+#: within this fraction of the largest ball load (else the step is solved in full); the loads'
+#: error is of the order of the residual (tests/test_dynamics.py measures it against the
+#: converged solve), an order below :data:`ITER_TOL`
+CHORD_TOL = 1e-5
+#: ... and when the next chord correction (the estimated remaining error of the ball positions)
+#: is within this fraction of the ball diameter: ~5e-7 rad of contact angle (L_o ~ 0.02 D)
+CHORD_XTOL = 1e-8
+
+
+class BallCarry(NamedTuple):
+    """What a time loop carries from step to step for the chord solve
+    (:func:`bearing_force_chord`): each ball's (estimated) equilibrium position, the groove-centre
+    offsets it belongs to, the regularised inverse of its 2x2 Jacobian and its closed-form
+    sensitivity to the offsets (both from the last full solve), whether they are usable, and
+    run counters."""
+
+    X1: jnp.ndarray             # (Z,) ball centres, axial (m)
+    X2: jnp.ndarray             # (Z,) radial (m)
+    A1: jnp.ndarray             # (Z,) the groove-centre offsets of that step (m)
+    A2: jnp.ndarray
+    inv: tuple                  # (i11, i12, i21, i22), each (Z,): the inverse Jacobian (m/N)
+    sens: tuple                 # (n1, n2, along, across), each (Z,): see _sensitivity
+    warm: jnp.ndarray           # () bool: False -- the next step solves in full
+    full: jnp.ndarray           # () steps solved in full (start, defect edges, rejected chords)
+    rejected: jnp.ndarray       # () chord steps rejected (residual above tolerance or not finite)
+    worst: jnp.ndarray          # () largest accepted chord residual / largest ball load
+
+
+def initial_ball_carry(n_balls):
+    """A :class:`BallCarry` whose first step solves in full."""
+    z = jnp.zeros(n_balls)
+    return BallCarry(z, z, z, z, (z, z, z, z), (z, z, z, z), jnp.bool_(False), jnp.float64(0.0),
+                     jnp.float64(0.0), jnp.float64(0.0))
+
+
+def _sensitivity(bearing, X1, X2, A1, A2, Ho, Hi):
+    """How a ball's equilibrium follows its groove-centre offsets A, from the omega = 0 geometry
+    (the ball on the line of centres, the deflections in a fixed ratio): along the line it moves
+    by delta_o / (delta_o + delta_i) of A's change, across it by L_o / |A|; a ball without both
+    contacts does not follow.  Returns (n1, n2, along, across), n the line's direction.  Only
+    the prediction of the next chord step uses it (its error costs rejected steps, never
+    accuracy)."""
+    D = bearing.ball_diameter
+    L, rL = norm2(A1, A2)
+    Lo, _ = norm2(X1, X2)
+    Li, _ = norm2(A1 - X1, A2 - X2)
+    d_o = Lo - (bearing.f_outer - 0.5) * D - Ho
+    d_i = Li - (bearing.f_inner - 0.5) * D - Hi
+    both = (d_o > 0.0) & (d_i > 0.0)
+    along = jnp.where(both, d_o * recip(jnp.where(both, d_o + d_i, 1.0)), 0.0)
+    across = jnp.where(both, Lo * rL, 0.0)
+    return A1 * rL, A2 * rL, along, across
+
+
+def _azimuth_sin_cos(psi):
+    """(sin psi, cos psi) of the ball azimuths psi (Z,), psi_j = theta + 2 pi j / Z
+    (:meth:`bearingsim.Bearing.ball_azimuths`), from those of theta = psi_0 by the
+    angle-addition formulas as a small matrix product with constant rotations: XLA's CPU backend
+    keeps a dot out of its loop fusions, so the products are computed once, where the sines and
+    cosines themselves would be recomputed in every kernel that reads them (~15 per time step).
+    Equal to jnp.sin / jnp.cos of psi to round-off."""
+    Z = psi.shape[-1]
+    d = 2.0 * np.pi / Z * np.arange(Z)
+    rot = jnp.asarray(np.stack([np.stack([np.cos(d), np.sin(d)], -1), np.stack([-np.sin(d), np.cos(d)], -1)], -2))
+    th = psi[..., :1]
+    out = jnp.einsum("zij,...j->...zi", rot, jnp.concatenate([jnp.sin(th), jnp.cos(th)], -1))
+    return out[..., 0], out[..., 1]
+
+
+def _chord(bearing, op, curve, q, psi, Ho, Hi, bc: BallCarry, tol):
+    """One chord step from the carried state: (R, record, X1, X2, A1, A2, accepted, residual
+    ratio)."""
+    sp, cp = _azimuth_sin_cos(psi)
+    A1, A2 = groove_centre_offsets_cs(bearing, q, sp, cp)
+    ws = None
+    if Ho is not None or Hi is not None:        # the undropped orbital speed, as in _newton
+        _, rL = norm2(A1, A2)
+        s, c = A1 * rL, A2 * rL
+        ws = ball_kinematics_cs(bearing, op, s, c, s, c)[2]
+    Ho, Hi = _zeros_like(Ho, psi), _zeros_like(Hi, psi)
+    # predicted positions: the last equilibrium moved with the offsets' change
+    n1, n2, along, across = bc.sens
+    dA1, dA2 = A1 - bc.A1, A2 - bc.A2
+    dn = dA1 * n1 + dA2 * n2
+    P1 = bc.X1 + across * dA1 + (along - across) * dn * n1
+    P2 = bc.X2 + across * dA2 + (along - across) * dn * n2
+    i11, i12, i21, i22 = bc.inv
+    r1, r2, *_ = ball_balance(bearing, op, (P1, P2), A1, A2, curve, Ho, Hi, ws)
+    X1 = P1 - (i11 * r1 + i12 * r2)
+    X2 = P2 - (i21 * r1 + i22 * r2)
+    r1, r2, G, H, rec = ball_balance(bearing, op, (X1, X2), A1, A2, curve, Ho, Hi, ws)
+    scale = jnp.max(jnp.sqrt(G * G + H * H))
+    res = jnp.max(jnp.maximum(jnp.abs(r1), jnp.abs(r2)))
+    ratio = res * recip(scale + 1e-30)
+    # the remaining position error, estimated by the next chord correction (across the line of
+    # centres a ball is ~100x softer than along it: the residuals alone would let its contact
+    # angles drift)
+    e1, e2 = i11 * r1 + i12 * r2, i21 * r1 + i22 * r2
+    moved = jnp.max(jnp.maximum(jnp.abs(e1), jnp.abs(e2)))
+    ok = (jnp.isfinite(ratio) & (ratio <= tol) & (moved <= CHORD_XTOL * bearing.ball_diameter)
+          & jnp.all(jnp.isfinite(X1) & jnp.isfinite(X2)))
+    # the next prediction's base: that correction (free: the residuals are at hand)
+    R = jnp.stack([jnp.sum(H * cp, -1), jnp.sum(H * sp, -1), jnp.sum(G, -1)], -1)
+    return R, rec, X1 - e1, X2 - e2, A1, A2, ok, ratio
+
+
+def bearing_force_chord(bearing, op: Operation, curve, q, psi, H_outer, H_inner, iterations, carry: BallCarry,
+                        refresh, tol=CHORD_TOL):
+    """:func:`bearing_force` with ``record=True`` for a time loop that carries the balls'
+    positions (``carry``, a :class:`BallCarry`): returns (R, record (RECORD_ROWS, Z), new carry).
+    ``psi``: :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z; their sines and cosines
+    are taken from theta's).
+
+    One plain evaluation of the ball equations (:func:`bearingsim.balls.ball_balance`) at
+    positions predicted from the last step's equilibria (moved with the change of the
+    groove-centre offsets, :func:`_sensitivity`): the loads (not linearised) and the record are
+    those of that position, and its residuals are those of exactly the reported state; a chord
+    step with the carried inverse Jacobian then estimates the equilibrium the next prediction
+    starts from.  The step is accepted when every ball's residual is within ``tol`` of the
+    largest ball load (and finite); otherwise -- and where ``refresh`` (a scalar: a defect edge
+    in the step, whose jump in depth the prediction does not follow) or the carry is not
+    ``warm`` -- the step is the full solve of :func:`bearing_force` (closed form +
+    ``iterations`` Newton steps), which also gives the positions, inverse Jacobians and
+    sensitivities carried on.  A single item only: under ``vmap`` the ``lax.cond`` runs both
+    branches."""
+    R_c, rec_c, X1c, X2c, A1c, A2c, ok, ratio = _chord(bearing, op, curve, q, psi, H_outer, H_inner, carry, tol)
+    need = refresh | ~carry.warm | ~ok
+
+    def full():
+        X1, X2, G, H, _, _, ex = _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, False,
+                                         jacobian=True, even=True)
+        A1, A2, Ho, Hi = ex[:4]
+        rec = contact_record(bearing, curve, (X1, X2), A1, A2, Ho, Hi)
+        sens = _sensitivity(bearing, X1, X2, A1, A2, Ho, Hi)
+        return _ring_load(G, H, psi, True), rec, X1, X2, A1, A2, tuple(ex[5:9]), sens
+
+    def chord():
+        return R_c, rec_c, X1c, X2c, A1c, A2c, carry.inv, carry.sens
+
+    R, rec, X1, X2, A1, A2, inv, sens = lax.cond(need, full, chord)
+    new = BallCarry(X1, X2, A1, A2, inv, sens, jnp.bool_(True), carry.full + need,
+                    carry.rejected + (carry.warm & ~refresh & ~ok),
+                    jnp.where(need, carry.worst, jnp.maximum(carry.worst, ratio)))
+    return R, rec, new
 
 
 def bearing_force_history(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=None,

@@ -203,7 +203,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     y0, ok, dy0, _ = _init_batch_jit(model, sols.displacement[:, :3], st0)
     edges = [defect_edge_times(mm, rectangular(items[i]), ts[-1] + 1.0 / fs, k_spin[i])
              for i, mm in enumerate(motions)]
-    y, ah, sens, nsteps, _ = run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, int(substeps), True, False)
+    y, ah, sens, nsteps, _, _ = run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, int(substeps), True, False)
     code = np.where(np.asarray(sols.result) != 0, int(RESULTS.initial_state),
                     np.where(~np.asarray(ok), int(RESULTS.initial_equilibrium), int(RESULTS.successful)))
     finite = np.all(np.isfinite(y), axis=(1, 2)) & np.all(np.isfinite(sens), axis=1)

@@ -32,6 +32,7 @@ from jax import lax
 from .. import sensor as sensor_mod
 from ..errors import InputError
 from ..xla import compiler_options, jit
+from .ball_force import initial_ball_carry
 from .model import DynamicModel
 from .motion import Motion, motion_at
 
@@ -56,7 +57,8 @@ def check_scheme(scheme):
         raise InputError(f"scheme must be one of {sorted(SCHEMES)}, got {scheme!r}")
 
 
-def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, record: bool = False):
+def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, record: bool = False,
+             chord: bool = False):
     """Advance over a chunk: ``stages`` (N, S, n_c, 3) motion at the non-zero stage points of
     every step, ``jumps`` (N, S) the fraction of the step at which a ball crosses a rectangular
     spall edge (-1: none).  carry = (y, dy, s, rec): state, its derivative, sensor-mode states,
@@ -75,7 +77,8 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
 
     def step(carry, st, th):
         y, k1, s = carry[:3]
-        rec = None
+        rec = carry[3] if record else None
+        bc = carry[-1] if chord else None
         if scheme == "newmark":
             # x: central difference; v: the damping trapezoidal (implicit, linear), the forces
             # weighted by where they jump (a step at theta h: weights theta, 1 - theta; none:
@@ -84,8 +87,12 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
             F0 = acc + MC @ v
             wgt = jnp.where(th >= 0.0, th, 0.5)
             x1 = x + h * v + 0.5 * h * h * acc
-            F1 = model.forces(x1, st[last], full_state=record)
-            F1, rec = F1 if record else (F1, None)
+            if chord:       # the balls from the carried positions; a defect edge: in full
+                F1, rec_c, bc = model.forces(x1, st[last], chord=(bc, th >= 0.0))
+                rec = rec_c if record else None
+            else:
+                F1 = model.forces(x1, st[last], full_state=record)
+                F1, rec = F1 if record else (F1, None)
             F1 = F1 / mass
             v1 = P @ (v - 0.5 * h * (MC @ v) + h * (wgt * F0 + (1.0 - wgt) * F1))
             acc1 = F1 - MC @ v1
@@ -101,7 +108,7 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
             s = sensor_mod.filter_update(flt, s, k1[8], k1n[8])
             if record:
                 rec = model.forces(y1[:5], st[last], full_state=True)[1]
-        return ((y1, k1n, s, rec) if record else (y1, k1n, s)), None
+        return (y1, k1n, s) + ((rec,) if record else ()) + ((bc,) if chord else ()), None
 
     def sample(carry, xs):
         st_sample, th_sample = xs
@@ -159,12 +166,19 @@ def time_grid(duration, sample_rate):
     return np.arange(n) / float(sample_rate)
 
 
-def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, progress, rec0=None):
+def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, progress, rec0=None,
+              ball_solver="full"):
     """Chunked fixed-step integration of one model (batch=False) or a batch (motions and the
     rectangular spall edge times ``edges`` lists).  Returns host arrays y (.., T, 10),
-    a_h (.., T, 2), sensor (.., T), the number of steps and, with the balls' record at t = 0
-    ``rec0`` (RECORD_ROWS, Z) (one model only), the per-sample records (T, RECORD_ROWS, Z)
-    (else None)."""
+    a_h (.., T, 2), sensor (.., T), the number of steps, with the balls' record at t = 0
+    ``rec0`` (RECORD_ROWS, Z) (one model only) the per-sample records (T, RECORD_ROWS, Z)
+    (else None), and the ball solver's counters (a dict: ``full_steps``, ``rejected_steps``,
+    ``worst_residual``; None without the chord method).
+
+    ``ball_solver``: "full" (every step from the closed form, :func:`bearing_force`) or "chord"
+    (one model with the Newmark scheme only: the balls' positions carried from step to step,
+    :func:`bearingsim.dynamics.bearing_force_chord`, a full solve at defect edges and wherever
+    a chord step misses its tolerance)."""
     h = 1.0 / (substeps * fs)
     grid = _stage_grid(scheme, substeps)
     f, z, g = model.params.modes()
@@ -172,7 +186,9 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     ms = motions if batch else [motions]
     es = edges if batch else [edges]
     record = rec0 is not None and not batch
-    carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ())
+    chord = ball_solver == "chord" and scheme == "newmark" and not batch
+    carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ()) + (
+        (initial_ball_carry(model.bearing.n_balls),) if chord else ())
     outs = []
     bar = None
     if progress:
@@ -186,7 +202,7 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
                                             jnp.full(len(ms), h), flt, scheme)
         else:
             carry, out = _advance_jit(model, carry, jnp.asarray(stg[0]), jnp.asarray(jmp[0]),
-                                      jnp.float64(h), flt, scheme, record)
+                                      jnp.float64(h), flt, scheme, record, chord)
         n = min(CHUNK, T - k0)
         # the sample axis is the first of an item's outputs
         outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n] if batch else np.asarray(a)[:n], out))
@@ -198,7 +214,11 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     ah = np.concatenate([o[1] for o in outs], axis=-2)
     sens = np.concatenate([o[2] for o in outs], axis=-1)
     recs = np.concatenate([o[3] for o in outs], axis=0) if record else None
-    return y, ah, sens, T * substeps, recs
+    stats = None
+    if chord:
+        bc = carry[-1]
+        stats = dict(full_steps=int(bc.full), rejected_steps=int(bc.rejected), worst_residual=float(bc.worst))
+    return y, ah, sens, T * substeps, recs, stats
 
 
 def run_adaptive(model, y0, m: Motion, ts, jumps, rtol, atol, coupling):

@@ -35,7 +35,7 @@ from jax import lax
 from ..defect import advance, contact_depths
 from ..kinematics import Operation
 from ..xla import jit
-from .ball_force import RECORD_ROWS, bearing_force
+from .ball_force import RECORD_ROWS, BallCarry, bearing_force, bearing_force_chord
 from .parameters import DynamicsParameters
 
 __all__ = ["DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps", "STEP_RHO"]
@@ -82,8 +82,20 @@ class DynamicModel(eqx.Module):
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state)
+        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state,
+                            even_azimuths=True)
         return (out[0], out[1]) if full_state else out[0]
+
+    def ring_load_chord(self, xrel, stage, carry: BallCarry, refresh):
+        """:meth:`ring_load` with ``full_state`` by the chord method from the balls' carried
+        state (:func:`bearingsim.dynamics.bearing_force_chord`): ([Fx, Fy, Fz], the balls'
+        record (RECORD_ROWS, Z), the new carry); ``refresh``: solve in full (a defect edge)."""
+        th, phi, omega = stage[0], stage[1], stage[2]
+        psi = self.bearing.ball_azimuths(th)
+        q = jnp.concatenate([xrel, self.tilts])
+        op = eqx.tree_at(lambda o: o.speed, self.op, omega)
+        Ho, Hi = self.depths(psi, phi)
+        return bearing_force_chord(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, carry, refresh)
 
     def masses(self):
         """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
@@ -97,18 +109,26 @@ class DynamicModel(eqx.Module):
         C = C.at[0, 3].set(-cb[0]).at[1, 4].set(-cb[1]).at[3, 0].set(-cb[0]).at[4, 1].set(-cb[1])
         return C.at[3, 3].set(cb[0] + ch).at[4, 4].set(cb[1] + ch)
 
-    def forces(self, x, stage, extra_x=0.0, full_state=False):
+    def forces(self, x, stage, extra_x=0.0, full_state=False, chord=None):
         """(5,) position- and time-dependent forces on [shaft (3), housing (2)]: applied loads,
         unbalance, bearing load R, support spring; ``extra_x`` adds to the housing along x.
-        ``full_state``: (forces, the balls' record (RECORD_ROWS, Z), see :meth:`ring_load`)."""
+        ``full_state``: (forces, the balls' record (RECORD_ROWS, Z), see :meth:`ring_load`).
+        ``chord``: (carry, refresh) -- the balls by :meth:`ring_load_chord`; returns (forces,
+        record, new carry)."""
         p = self.params
         ph, w = stage[1], stage[2]
-        R = self.ring_load(jnp.stack([x[0] - x[3], x[1] - x[4], x[2]]), stage, full_state)
-        R, rec = R if full_state else (R, None)
+        xrel = jnp.stack([x[0] - x[3], x[1] - x[4], x[2]])
+        if chord is not None:
+            R, rec, bc = self.ring_load_chord(xrel, stage, *chord)
+        else:
+            R = self.ring_load(xrel, stage, full_state)
+            R, rec = R if full_state else (R, None)
         Fu = p.unbalance * w * w * jnp.stack([jnp.cos(ph), jnp.sin(ph), jnp.zeros_like(ph)])
         Fs = self.loads[:3] + Fu - R
         Fh = R[:2] - p.housing_stiffness * x[3:5] + jnp.stack([extra_x, 0.0 * extra_x])
         F = jnp.concatenate([Fs, Fh])
+        if chord is not None:
+            return F, rec, bc
         return (F, rec) if full_state else F
 
     def rhs(self, y, stage, extra_x=0.0):

@@ -104,6 +104,8 @@ class DynamicsResult(NamedTuple):
     realism: dict                       # labels of the realism draws (seed, slip draws, ...)
     shaft_angle: np.ndarray = None      # (T,) rad (an inner spall sits at centre + shaft angle)
     spin_ratio: float = 0.0             # omega_R / omega (a ball pit's spin angle: centre + ratio x shaft angle)
+    ball_solver_stats: dict = None      # the chord method's counters (full_steps, rejected_steps,
+                                        # worst_residual); None: every step solved in full
 
 
 
@@ -145,7 +147,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
              theta0=0.0, realism: Realism | None = None, seed=0, hertz_method="exact",
              scheme="newmark", substeps="auto", ball_iterations="auto", record_balls=True,
              integrator="fixed", rtol=1e-8, atol=1e-8, sensor_coupling=False, progress=None,
-             throw=True) -> DynamicsResult:
+             throw=True, ball_solver="chord") -> DynamicsResult:
     """Time simulation of MODEL.md section 7 (the model: :mod:`bearingsim.dynamics.model`).
 
     ``loads`` [Fx, Fy, Fz, Mx, My] (N, N m), ``spall`` None (healthy), a :class:`Spall` on the
@@ -157,10 +159,16 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     "auto": :func:`choose_ball_iterations`).  ``integrator="adaptive"``: the diffrax reference
     (``rtol``/``atol`` on displacements in um and velocities in mm/s; sensor modes in the ODE,
     with their reaction on the housing when ``sensor_coupling``).  ``record_balls``: per-sample
-    ball loads and angles.  ``progress``: a tqdm bar (default: duration >= 1 s).  Raises
+    ball loads and angles.  ``ball_solver``: "chord" (default; the Newmark scheme carries the
+    balls' positions from step to step and solves them in full only at defect edges and where a
+    chord step misses its tolerance, :func:`bearingsim.dynamics.bearing_force_chord`; its
+    counters in ``result.ball_solver_stats``) or "full" (every step from the closed form).
+    ``progress``: a tqdm bar (default: duration >= 1 s).  Raises
     :class:`DynamicsError` when the run fails and ``throw`` (else check ``result.result``).
     """
     check_scheme(scheme)
+    if ball_solver not in ("chord", "full"):
+        raise InputError(f"ball_solver must be 'chord' or 'full', got {ball_solver!r}")
     if integrator not in ("fixed", "adaptive"):
         raise InputError(f"integrator must be 'fixed' or 'adaptive', got {integrator!r}")
     params = DynamicsParameters() if params is None else params
@@ -196,11 +204,13 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     substeps = int(substeps)
     progress = (float(duration) >= 1.0) if progress is None else bool(progress)
     jumps = defect_edge_times(m, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
+    solver_stats = None
     if code == RESULTS.successful:
         recs = None
         if integrator == "fixed":
-            y, ah, sens, nsteps, recs = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps, False,
-                                                  progress, rec0 if record_balls else None)
+            y, ah, sens, nsteps, recs, solver_stats = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps,
+                                                                False, progress, rec0 if record_balls else None,
+                                                                ball_solver)
         else:
             y, ah, sens, nsteps = run_adaptive(model, y0, m, ts, jumps, rtol, atol, sensor_coupling)
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(sens))):
@@ -232,7 +242,8 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         frequencies=freqs, contact_angle=a_m, jump_times=jumps,
         pass_times=defect_pass_times(m, defects, ts[-1], k_spin), quasi_static=sol,
         contact_damping=np.asarray(model.contact_damping), ball_iterations=int(ball_iterations),
-        substeps=substeps, scheme=scheme, realism=labels, shaft_angle=phi, spin_ratio=k_spin)
+        substeps=substeps, scheme=scheme, realism=labels, shaft_angle=phi, spin_ratio=k_spin,
+        ball_solver_stats=solver_stats)
 
 
 def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
