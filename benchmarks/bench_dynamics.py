@@ -16,11 +16,10 @@
 Issue 11 (the same targets for the new defect classes): (a) and the wall ratio of (b) are also
 printed for the inner-race (cases/cwru_6205_inner.toml) and ball (cases/cwru_6205_ball.toml)
 cases (the scipy baseline is the outer-race one: its right-hand side costs the same for every
-class), and (c) for the four-class spec cases/dataset_cwru_4class.toml (--count4 items, the
-1000-item time scaled from them).
+class), and (c) for the four-class spec cases/dataset_cwru_4class.toml (--count4 items).
 
 The machine (2 cores) may be shared: the numbers are indicative.
-Usage: python benchmarks/bench_dynamics.py [--duration 1.0] [--count 1000] [--count4 160]
+Usage: python benchmarks/bench_dynamics.py [--duration 1.0] [--count 1000] [--count4 1000]
        [--classes outer,inner,ball] [--no-compile]
 """
 from __future__ import annotations
@@ -118,13 +117,20 @@ spec = load_case(pathlib.Path(sys.argv[1]))
 count = int(sys.argv[2])
 chunk = int(spec.data["dataset"]["chunk"])
 with tempfile.TemporaryDirectory() as tmp:
-    make_dataset(spec.with_value("dataset.count", chunk), pathlib.Path(tmp) / "warm.h5", progress=False)
+    # the compile run: the same items (the same Newton step count and substeps, chosen from the
+    # drawn items' extremes) over one 1024-sample block -- the program of the measured run
+    fs0 = float(spec.dynamics_settings()["sample_rate"])
+    warm = spec.with_value("dataset.count", count).with_value("dataset.duration_s", 1024.0 / fs0)
+    make_dataset(warm, pathlib.Path(tmp) / "warm.h5", progress=False)
     rss0 = rss()
     t, c = time.perf_counter(), time.process_time()
     s = make_dataset(spec.with_value("dataset.count", count), pathlib.Path(tmp) / "full.h5", progress=True)
     el, cpu = time.perf_counter() - t, time.process_time() - c
     size = (pathlib.Path(tmp) / "full.h5").stat().st_size / 1e6
-print(json.dumps(dict(el=el, cpu=cpu, failed=int(s.failed), messages="; ".join(s.message()), size=size,
+    import h5py
+    with h5py.File(pathlib.Path(tmp) / "full.h5", "r") as f:
+        its, subs = int(f.attrs["ball_iterations"]), int(f.attrs["substeps"])
+print(json.dumps(dict(its=its, subs=subs, el=el, cpu=cpu, failed=int(s.failed), messages="; ".join(s.message()), size=size,
                       rss0=rss0, rss=rss(), chunk=chunk, duration=spec.data["dataset"]["duration_s"],
                       fs=spec.dynamics_settings()["sample_rate"])))
 """
@@ -174,7 +180,7 @@ def main():
     ap.add_argument("--duration", type=float, default=1.0)
     ap.add_argument("--scipy-duration", type=float, default=0.02)
     ap.add_argument("--count", type=int, default=1000, help="data set items (0: skip (c))")
-    ap.add_argument("--count4", type=int, default=160,
+    ap.add_argument("--count4", type=int, default=1000,
                     help="four-class data set items (0: skip; the 1000-item time is scaled)")
     ap.add_argument("--classes", default="outer,inner,ball",
                     help="defect classes for (a) (outer always; inner, ball: issue 11)")
@@ -212,7 +218,7 @@ def main():
             continue
         r = dataset_run(spec, count)
         print(f"(c) {what} {count} x {r['duration']} s at {r['fs']:.0f} Hz (chunks of {r['chunk']}, a fresh "
-              f"process): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after compilation, {count / r['el']:.1f} "
+              f"process; {r['its']} ball Newton step(s), {r['subs']} step(s)/sample): {r['el']:.1f} s wall ({r['cpu']:.1f} s CPU) after compilation, {count / r['el']:.1f} "
               f"items/s: 1000 items in ~{1000 * r['el'] / count:.0f} s (target <= 60 s), {r['failed']} failed "
               f"({r['messages'] or 'none'}), file {r['size']:.0f} MB; peak RSS {r['rss']:.0f} MB (before "
               f"{r['rss0']:.0f} MB; target <= 2048)")

@@ -351,6 +351,11 @@ def next_iterations(its):
     return max(its, default=ITER_CHOICES[-1])
 
 
+#: cage angles every :func:`choose_ball_iterations` checks at least (12 over a ball pitch and six
+#: per defect): the list is padded to this length so that the check compiles once
+CHECK_ANGLES = 18
+
+
 def choose_ball_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=ITER_TOL, spin_ratio=0.0):
     """Smallest number of Newton steps (of 1, 2, 3, 4, 8, 16) whose ball loads match the
     converged ball solve (:func:`ball_errors`) to ``tol`` (relative to the largest ball load) over one ball pitch of
@@ -373,7 +378,13 @@ def choose_ball_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=ITER_TO
             elif spin_ratio > 0:                # the pit turned into the outer and the inner contact
                 for target in (0.0, np.pi):
                     angles.append(float(theta0)), phis.append((target - c - u) / spin_ratio)
+    # one program per bearing and defect slots: the angle list padded to a fixed length (a
+    # repeated angle does not change the max) and the spin ratio traced, not static
+    pad = CHECK_ANGLES - len(angles)
+    if pad > 0:
+        angles, phis = angles + [angles[-1]] * pad, phis + [phis[-1]] * pad
     errs = np.asarray(_ball_errors_jit(bearing, op, jnp.asarray(q), spall, curve, jnp.asarray(angles),
-                                       jnp.array([0.95, 1.0, 1.05]), jnp.asarray(phis), float(spin_ratio)))
+                                       jnp.array([0.95, 1.0, 1.05]), jnp.asarray(phis),
+                                       jnp.asarray(float(spin_ratio))))
     ok = np.flatnonzero(errs <= tol)
     return (ITER_CHOICES[int(ok[0])], float(errs[ok[0]])) if ok.size else (0, float(errs.min()))
