@@ -9,7 +9,8 @@ Everything here is about one ball (vmapped over balls by the callers):
   the contact angles are ratios of the geometry, ``delta**1.5 = delta*sqrt(delta)``, K(alpha)
   is a power series in cos(alpha)), because the solvers evaluate it millions of times;
 * :func:`ball_state` -- the full state of a ball (angles, loads, speeds) for reporting;
-* :func:`static_ball_position` -- the omega = 0 closed form (collinear contacts; exact at rest);
+* :func:`static_ball_position` -- the omega = 0 closed form (collinear contacts; exact at rest),
+  and at speed for a ball its raceways barely reach the corner of the raceways F_c rolls it to;
 * :func:`ball_newton_step`, :func:`solve_ball_fixed` (a fixed number of damped Newton steps,
   the dynamics' solver) and :func:`solve_ball` (to convergence, implicitly differentiable);
 * :func:`balls_at` -- every ball in equilibrium for a given q (the load-displacement map), and
@@ -264,10 +265,17 @@ def ball_balance(bearing, op: Operation, x, A1, A2, curve, H_outer=0.0, H_inner=
     return r1, r2, G, H, jnp.stack([c.Q_i, c.Q_o, c.si, c.ci, c.so, c.co])
 
 
+#: :func:`static_ball_position` starts a barely reached ball at speed in the raceways' corner
+#: (False: the collinear start of earlier versions; tests/test_balls.py compares the two)
+LENS_START = True
+
+
 def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_inner=0.0):
     """Closed-form ball centre at omega = 0 (collinear contacts, delta_i/delta_o =
     (K_o/K_i)^(2/3)), exact at rest; at speed it is pushed out to at least the outer deflection
-    that carries the ball's own centrifugal force (returned as ``d_c``, m)."""
+    that carries the ball's own centrifugal force (returned as ``d_c``, m), and where the
+    raceways barely reach it (d_tot share_o < d_c) it starts in their corner (see below: the
+    start from which a lightly loaded ball's Newton steps converge quadratically)."""
     D = bearing.ball_diameter
     L = jnp.sqrt(A1 * A1 + A2 * A2)
     s, c = _quotient(A1, L), _quotient(A2, L)
@@ -280,7 +288,29 @@ def static_ball_position(bearing, op: Operation, A1, A2, curve, H_outer=0.0, H_i
     d_c = jnp.cbrt(jnp.maximum(Fc, 0.0) / K_o) ** 2
     d_o = jnp.where(Fc > 0.0, jnp.maximum(d_o, d_c), d_o)
     Lo = (bearing.f_outer - 0.5) * D + H_outer + d_o
-    return jnp.stack([Lo * s, Lo * c]), d_c
+    X1, X2 = Lo * s, Lo * c
+    if LENS_START:
+        # A ball at speed that its raceways barely reach (d_tot share_o < d_c: at the edge of the
+        # load zone, over a shallow pit) rests where F_c puts it, not on the line of the groove
+        # centres: on the outer raceway at the overlap d_c that carries F_c, rolled towards the
+        # groove bottom (alpha_o -> 0) until it meets the inner raceway -- the corner where the
+        # circles of overlap d_c (outer) and d_c (1 - share_o) / share_o (inner) around the two
+        # groove centres intersect, or alpha_o = 0 if it gets there first.  The collinear start
+        # lies where both contacts are nearly unloaded: Newton's first step from that (zero-
+        # stiffness) point overshoots along the groove and then creeps back over 5-8 steps.
+        # Continuous: at d_tot share_o = d_c the corner is the collinear start (h = 0).
+        lens = (Fc > 0.0) & (d_tot * share_o < d_c)
+        ro = (bearing.f_outer - 0.5) * D + H_outer + d_c
+        ri = (bearing.f_inner - 0.5) * D + H_inner + d_c * (1.0 - share_o) * _quotient(1.0, share_o)
+        a = (L * L + ro * ro - ri * ri) * _quotient(0.5, L)
+        h = jnp.sqrt(jnp.maximum(ro * ro - a * a, 0.0))
+        sg = jnp.where(s >= 0.0, 1.0, -1.0)
+        Y1 = a * s - sg * h * c
+        past = sg * Y1 < 0.0                    # the corner lies beyond alpha_o = 0
+        Y1 = jnp.where(past, 0.0, Y1)
+        Y2 = jnp.where(past, ro, a * c + sg * h * s)
+        X1, X2 = jnp.where(lens, Y1, X1), jnp.where(lens, Y2, X2)
+    return jnp.stack([X1, X2]), d_c
 
 
 def lift_onto_outer(bearing, y, d_c, H_outer):
