@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
@@ -38,7 +39,7 @@ from ..xla import jit
 from .ball_force import RECORD_ROWS, BallCarry, bearing_force, bearing_force_chord
 from .parameters import DynamicsParameters
 
-__all__ = ["DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps", "STEP_RHO"]
+__all__ = ["DynamicModel", "build_model", "contact_damping", "damping_matrix", "initial_state", "linear_modes", "choose_substeps", "STEP_RHO"]
 
 #: |lambda| h bound of substeps="auto"
 STEP_RHO = 0.5
@@ -104,10 +105,7 @@ class DynamicModel(eqx.Module):
 
     def damping_matrix(self):
         """(5, 5) linear damping: contact damping C_b on v_rel and the support damping c_h."""
-        cb, ch = self.contact_damping, self.params.housing_damping
-        C = jnp.zeros((5, 5)).at[jnp.arange(3), jnp.arange(3)].set(cb)
-        C = C.at[0, 3].set(-cb[0]).at[1, 4].set(-cb[1]).at[3, 0].set(-cb[0]).at[4, 1].set(-cb[1])
-        return C.at[3, 3].set(cb[0] + ch).at[4, 4].set(cb[1] + ch)
+        return damping_matrix(self.contact_damping, self.params.housing_damping)
 
     def forces(self, x, stage, extra_x=0.0, full_state=False, chord=None):
         """(5,) position- and time-dependent forces on [shaft (3), housing (2)]: applied loads,
@@ -138,15 +136,32 @@ class DynamicModel(eqx.Module):
         return jnp.concatenate([v, a])
 
 
+@jax.jit
+def damping_matrix(cb, ch):
+    """(5, 5) damping of [x_s, y_s, z_s, x_h, y_h] from the contact damping cb (3,) on the
+    shaft-housing motion and the support damping ch; one small program (called on the host it
+    compiles once instead of a dozen element-wise kernels; inside a trace it is inlined)."""
+    c0, c1, c2 = cb[..., 0], cb[..., 1], cb[..., 2]
+    z = jnp.zeros_like(c0)
+    rows = ((c0, z, z, -c0, z), (z, c1, z, z, -c1), (z, z, c2, z, z), (-c0, z, z, c0 + ch, z), (z, -c1, z, z, c1 + ch))
+    return jnp.stack([jnp.stack(r, -1) for r in rows], -2)
+
+
+@jax.jit
+def contact_damping(Kt, ratio, mass):
+    """Contact damping 2 zeta sqrt(K m) per shaft direction from the bearing stiffness (one
+    program, see :func:`damping_matrix`)."""
+    K = jnp.diagonal(Kt, axis1=-2, axis2=-1)
+    return 2.0 * ratio[..., None] * jnp.sqrt(jnp.maximum(K, 0.0) * mass[..., None])
+
+
 def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, curve, iterations,
                 spin_ratio=0.0):
     """DynamicModel from the quasi-static solution ``sol`` (its tilts, stiffness and the contact
     damping built from it); ``defects``: a tuple of Spall (see :class:`DynamicModel`)."""
     q = sol.displacement
     Kt = sol.stiffness[..., :3, :3]
-    K = jnp.diagonal(Kt, axis1=-2, axis2=-1)
-    cb = 2.0 * params.contact_damping_ratio[..., None] * jnp.sqrt(
-        jnp.maximum(K, 0.0) * params.shaft_mass[..., None])
+    cb = contact_damping(Kt, params.contact_damping_ratio, params.shaft_mass)
     loads = jnp.asarray(loads, jnp.float64)
     return DynamicModel(bearing, op, tuple(defects), curve, loads, q[..., 3:5], cb, Kt,
                         jnp.asarray(spin_ratio, jnp.float64) + jnp.zeros(jnp.shape(q)[:-1]),
