@@ -112,3 +112,32 @@ def test_ball_balance_is_ball_state():
         assert float(jnp.max(jnp.abs(got - want))) <= 1e-13 * scale
     for k, a in ((2, st.alpha_inner), (4, st.alpha_outer)):
         assert float(jnp.max(jnp.abs(jnp.arctan2(rec[k], rec[k + 1]) - a))) <= 1e-14
+
+
+def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
+    """simulate compiles the ball-step check and the time loop in background threads
+    (dynamics.precompile_ball_check, precompile_fixed) while the quasi-static solve and the
+    equilibrium at t = 0 compile: after the threads are joined the run itself compiles neither
+    (the warm-ups built the same programs: same padding, static arguments and shapes).  A
+    bearing with 11 balls, used by no other test, so that nothing is compiled before."""
+    import logging
+
+    c = parse_case(CWRU_LIKE.replace("balls = 9", "balls = 11"), "eleven.toml")
+    b, op, F, sp = c.bearing(), c.operation(), c.loads(), c.spall()
+    p = dyn.DynamicsParameters.from_settings(c.dynamics_settings())
+    before = jax.config.jax_log_compiles
+    jax.config.update("jax_log_compiles", True)    # global: a context would hold in this thread only
+    try:
+        with caplog.at_level(logging.WARNING):
+            r = dyn.simulate(b, op, F, sp, p, 0.01, 48000.0, theta0=c.cage_angle, progress=False)
+    finally:
+        jax.config.update("jax_log_compiles", before)
+    assert r.result == 0
+    compiles = [(rec.threadName, rec.getMessage()) for rec in caplog.records if "Compiling" in rec.getMessage()]
+    names = ("jit(ball_errors)", "jit(_advance)")
+    for name in names:
+        threads = [t for t, m in compiles if name in m]
+        assert threads, f"{name} was not compiled at all: {compiles}"
+        assert all(t == "bearingsim-precompile" for t in threads), (name, threads)
+    # a second configuration already compiled: no thread
+    assert dyn.precompile_ball_check(b, op, (sp,), bs.hertz.stiffness_curve(b), c.cage_angle) is None

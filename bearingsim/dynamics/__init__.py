@@ -23,7 +23,7 @@ from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase,
 # --------------------------------------------------------------------------- ball forces
 from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, BallCarry, ball_errors,
                          bearing_force, bearing_force_chord, bearing_force_history, choose_ball_iterations,
-                         initial_ball_carry, next_iterations, record_loads_angles)
+                         initial_ball_carry, next_iterations, precompile_ball_check, record_loads_angles)
 
 # -------------------------------------------------------------------------------- model
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
@@ -45,7 +45,7 @@ __all__ = [
     "RESULTS", "DynamicsError", "DynamicsParameters", "Realism",
     "Motion", "draw_motion", "motion_at", "seed_streams", "motion_labels", "defect_phase",
     "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
-    "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations",
+    "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations", "precompile_ball_check",
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
     "CHORD_TOL", "BallCarry", "initial_ball_carry", "bearing_force_chord",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",

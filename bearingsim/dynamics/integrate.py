@@ -24,6 +24,8 @@ housing, ``coupling=True``, resonator mass ``m_r g_k`` per mode).
 """
 from __future__ import annotations
 
+import threading
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -36,7 +38,7 @@ from .ball_force import initial_ball_carry
 from .model import DynamicModel
 from .motion import Motion, motion_at
 
-__all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "run_adaptive"]
+__all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive"]
 
 #: explicit Runge-Kutta schemes: (c, a, b)
 SCHEMES = {
@@ -219,6 +221,35 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
         bc = carry[-1]
         stats = dict(full_steps=int(bc.full), rejected_steps=int(bc.rejected), worst_residual=float(bc.worst))
     return y, ah, sens, T * substeps, recs, stats
+
+
+_PRECOMPILED = set()
+
+
+def precompile_fixed(model, y0, motion, edges, fs, scheme, substeps, rec0=None, ball_solver="full"):
+    """Compile the time loop's program for one model in a background thread and return the
+    thread (join it before :func:`run_fixed`), or None when this configuration was compiled
+    before in this process.  XLA releases the GIL while it compiles, so on a second core this
+    overlaps the compilation of the equilibrium at t = 0 (a first simulation: ~1 s).  The thread
+    runs one chunk from ``y0`` at rest (``rec0``: a record of the right shape, or None) and
+    discards it; an error there is the loop's own and is raised by the real run."""
+    leaves, tree = jax.tree_util.tree_flatten(model)
+    key = (tree, tuple(np.shape(a) for a in leaves), scheme, int(substeps), rec0 is None, ball_solver)
+    if key in _PRECOMPILED:
+        return None
+    _PRECOMPILED.add(key)
+    y0 = jnp.asarray(y0)
+
+    def run():
+        try:
+            run_fixed(model, y0, jnp.zeros_like(y0), motion, edges, fs, CHUNK, scheme, substeps, False, False,
+                      None if rec0 is None else jnp.zeros_like(jnp.asarray(rec0)), ball_solver)
+        except Exception:       # noqa: BLE001 -- the real run raises it
+            pass
+
+    th = threading.Thread(target=run, name="bearingsim-precompile", daemon=True)
+    th.start()
+    return th
 
 
 def run_adaptive(model, y0, m: Motion, ts, jumps, rtol, atol, coupling):

@@ -22,8 +22,8 @@ from ..hertz import stiffness_curve
 from ..jones import solve
 from ..kinematics import Operation, defect_frequencies
 from ..xla import jit
-from .ball_force import ITER_CHOICES, bearing_force, choose_ball_iterations, record_loads_angles
-from .integrate import CHUNK, check_scheme, run_adaptive, run_fixed, time_grid
+from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
+from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
 from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at, motion_labels, seed_streams
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
@@ -179,12 +179,16 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     ts = time_grid(duration, fs)
     T = ts.size
     curve = stiffness_curve(bearing, hertz_method)
+    # the ball-step check's program compiles on another core while the quasi-static solve's does
+    pre = precompile_ball_check(bearing, op, defects, curve, theta0) if ball_iterations == "auto" else None
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=defects or None, hertz_method=hertz_method,
                 throw=False)
     code = RESULTS.successful if int(sol.result) == 0 else RESULTS.initial_state
     freqs, a_m = characteristic_frequencies(bearing, op, sol)
     k_spin = spin_ratio(bearing, a_m)
     err = 0.0
+    if pre is not None:
+        pre.join()
     if ball_iterations == "auto":
         ball_iterations, err = choose_ball_iterations(bearing, op, sol.displacement, defects, curve, theta0,
                                                       spin_ratio=k_spin)
@@ -195,15 +199,23 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
                     slip_reference(defects), realism)
     st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
-    y0, ok, dy0, rec0 = initial_state_jit(model, sol.displacement[:3], st0)
-    if not bool(ok):
-        code = code or RESULTS.initial_equilibrium
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
         substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
     substeps = int(substeps)
-    progress = (float(duration) >= 1.0) if progress is None else bool(progress)
     jumps = defect_edge_times(m, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
+    pre = None
+    if integrator == "fixed" and code == RESULTS.successful:
+        # the time loop's program compiles on another core while the equilibrium's does
+        y_rest = jnp.concatenate([sol.displacement[:3], jnp.zeros(7)])
+        rec_like = np.zeros((RECORD_ROWS, bearing.n_balls)) if record_balls else None
+        pre = precompile_fixed(model, y_rest, m, jumps, fs, scheme, substeps, rec_like, ball_solver)
+    y0, ok, dy0, rec0 = initial_state_jit(model, sol.displacement[:3], st0)
+    if not bool(ok):
+        code = code or RESULTS.initial_equilibrium
+    if pre is not None:
+        pre.join()
+    progress = (float(duration) >= 1.0) if progress is None else bool(progress)
     solver_stats = None
     if code == RESULTS.successful:
         recs = None
