@@ -28,7 +28,9 @@ Memory stays bounded by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` 
               ``depth_rule = "pit"`` the effective depth of a round pit, :func:`pit_depths`),
               bpfo_Hz, ftf_Hz, shaft_Hz, bpfi_Hz, bsf_Hz, result (0 = ok),
               realism_seed, slip_percent, pass_jitter_percent (the std of the item's drawn
-              pass-interval factors), speed_fluctuation_percent, noise_rms_m_s2
+              pass-interval factors), unbridged_fraction (of the item's pit under its contact),
+              pass_amplitude_cv_percent and pass_delay_sd_percent (its pass-to-pass variability:
+              the [dynamics] maxima times that fraction), speed_fluctuation_percent, noise_rms_m_s2
 
 Root attributes ``bearingsim_version``, ``case_toml``, ``seed`` (and ``count``,
 ``sample_rate_Hz``, ``duration_s``, ``balls``, ``ball_iterations``, ``substeps``, ``scheme``).
@@ -82,6 +84,9 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "realism_seed": ("<u4", "-"),
     "slip_percent": ("<f8", "%"),
     "pass_jitter_percent": ("<f8", "%"),
+    "unbridged_fraction": ("<f8", "-"),
+    "pass_amplitude_cv_percent": ("<f8", "%"),
+    "pass_delay_sd_percent": ("<f8", "%"),
     "speed_fluctuation_percent": ("<f8", "%"),
     "noise_rms_m_s2": ("<f8", "m/s^2"),
 }
@@ -259,7 +264,9 @@ def item_seeds(seed, n) -> np.ndarray:
 
 
 def pit_depths(case, lab, chunk, slots, profile="rectangular"):
-    """(depth in m, ok) per item for ``[dataset] depth_rule = "pit"``: every fault item's defect
+    """(depth in m, ok, unbridged fraction) per item for ``[dataset] depth_rule = "pit"`` (and
+    for the pass-to-pass variability, which scales with the unbridged fraction of the item's
+    pit under the same contact, :func:`bearingsim.realism.pit_unbridged_fraction`): every fault item's defect
     is a round EDM pit of diameter ``spall_length_mm`` and machined depth ``spall_depth_mm``
     narrower than the ball's contact ellipse, and the simulation takes the depth that loses the
     same Hertz load (:func:`bearingsim.realism.pit_depth_of_solution`: the ball keeps rolling on
@@ -271,12 +278,12 @@ def pit_depths(case, lab, chunk, slots, profile="rectangular"):
     slots: the program the simulation compiles anyway), with ball 0 at the pit for an outer-race
     pit and at the load-zone centre (azimuth 0: the radial load is along +x) for an inner-race or
     ball pit.  ``ok`` is False where that state did not converge (the item is then flagged
-    ``pit_contact``); healthy items get 0."""
+    ``pit_contact``); healthy items get 0 (depth and fraction)."""
     import jax
     import jax.numpy as jnp
 
     from .kinematics import Operation
-    from .realism import pit_depth_of_solution
+    from .realism import pit_depth_of_solution, pit_unbridged_fraction
 
     b = case.bearing()
     n = lab.size
@@ -285,7 +292,7 @@ def pit_depths(case, lab, chunk, slots, profile="rectangular"):
     machined = to_si(lab["spall_depth_mm"], "mm")
     center = to_si(lab["spall_center_deg"], "deg")
     control = case.data["operation"]["raceway_control"]
-    out, ok = np.zeros(n), np.ones(n, bool)
+    out, ok, unbridged = np.zeros(n), np.ones(n, bool), np.zeros(n)
     faulty = np.flatnonzero(~lab["healthy"])
     for k in range(0, faulty.size, chunk):
         idx = faulty[k:k + chunk]
@@ -306,7 +313,8 @@ def pit_depths(case, lab, chunk, slots, profile="rectangular"):
                 continue
             sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
             out[i] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
-    return out, ok
+            unbridged[i] = pit_unbridged_fraction(sol_j, b, 0, str(loc[i]), w[i])
+    return out, ok, unbridged
 
 
 def _run_settings(case, lab, extent, depth, center, profile, fs, params):
@@ -375,18 +383,19 @@ def _chunk_file(folder: Path, k: int) -> Path:
     return folder / f"chunk_{k:06d}.npz"
 
 
-_CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent")
+_CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
+                 "pass_amplitude_cv_percent")
 
 
 def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
-                    duration, fs, seeds, it, sub, loc, slots, pit_ok):
+                    duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged):
     m = idx.size
     pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
     res = dynamics.simulate_batch(
         b, lab["speed_rpm"][pad], loads[pad], center[pad], extent[pad], depth[pad], profile, params,
         duration, fs, case.cage_angle, location=loc[pad], slots=slots, realism=realism, seeds=seeds[pad],
         control=case.data["operation"]["raceway_control"], hertz_method=case.hertz_method,
-        ball_iterations=it, substeps=sub)
+        ball_iterations=it, substeps=sub, unbridged=unbridged[pad])
     a = np.asarray(res.sensor_acceleration)[:m]
     code = np.asarray(res.result)[:m].astype(np.int32)
     finite = np.all(np.isfinite(a), axis=1)
@@ -394,10 +403,12 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
     code = np.where(pit_ok[idx], code, int(DatasetResult.pit_contact))
     ok = code == 0
     jitter = np.array([r["pass_jitter_percent"] for r in res.realism[:m]])
+    delay = np.array([r.get("pass_delay_sd_percent", 0.0) for r in res.realism[:m]])
+    cv = np.array([r.get("pass_amplitude_cv_percent", 0.0) for r in res.realism[:m]])
     freq = {k: np.broadcast_to(np.asarray(getattr(res, k), float), (chunk,))[:m]
             for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
     return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
-                pass_jitter_percent=jitter,
+                pass_jitter_percent=jitter, pass_delay_sd_percent=delay, pass_amplitude_cv_percent=cv,
                 **{k: np.where(np.isfinite(v) & ok, v, 0.0) for k, v in freq.items()})
 
 
@@ -432,9 +443,9 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
             sig = f.create_dataset("signals", shape=(n, T), dtype="float32", chunks=(1, T),
                                    compression="gzip", fillvalue=0.0)
             sig.attrs["units"] = "m/s^2"
-            sig.attrs["description"] = ("sensor acceleration (sensor modes, slip, speed fluctuation and "
-                                        "noise of the [dynamics] keys); row i has the labels /labels[i]; "
-                                        "zero where result != 0")
+            sig.attrs["description"] = ("sensor acceleration (sensor modes, slip, speed fluctuation, "
+                                        "pass-to-pass variability and noise of the [dynamics] keys); "
+                                        "row i has the labels /labels[i]; zero where result != 0")
             for k in range(chunks):                    # one chunk in memory at a time
                 with np.load(_chunk_file(folder, k)) as c:
                     for j, i in enumerate(c["index"]):
@@ -453,7 +464,7 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
                 "its spin angle at t = 0, 0 = in the outer contact, the pit on ball 0); "
                 "bpfo_Hz = Z ftf_Hz from the quasi-static cage speed of the item, bpfi_Hz and bsf_Hz "
                 "(a pit meets a raceway at 2 bsf_Hz) at its mean loaded contact angle; result 0 = ok; "
-                "realism_seed seeds the item's slip, speed fluctuation and noise")
+                "realism_seed seeds the item's slip, speed fluctuation, noise and pass-to-pass variability")
 
 
 def make_dataset(case, path, progress=True) -> DatasetSummary:
@@ -491,9 +502,12 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     extent = to_si(lab["spall_length_mm"], "mm") / np.array([radius[L] for L in loc])
     depth = to_si(lab["spall_depth_mm"], "mm")
     center = to_si(lab["spall_center_deg"], "deg")
-    pit_ok = np.ones(n, bool)
-    if ds.get("depth_rule", "machined") == "pit":
-        depth, pit_ok = pit_depths(case, lab, chunk, slots, profile)
+    pit_ok, unbridged = np.ones(n, bool), np.zeros(n)
+    if ds.get("depth_rule", "machined") == "pit" or realism.pass_variation:
+        pit, pit_ok, unbridged = pit_depths(case, lab, chunk, slots, profile)
+        if ds.get("depth_rule", "machined") == "pit":
+            depth = pit
+    lab["unbridged_fraction"] = unbridged
     lab["effective_depth_mm"] = from_si(depth, "mm")
     loads = np.zeros((n, 5))
     loads[:, 0] = lab["radial_N"]
@@ -522,7 +536,8 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
             for k in todo:
                 idx = order[k * chunk:(k + 1) * chunk]
                 out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
-                                      params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok)
+                                      params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok,
+                                      unbridged)
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
                 done += idx.size
                 bar.update(idx.size)

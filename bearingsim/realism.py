@@ -28,7 +28,10 @@ Pass-to-pass variability
     ``max(0, 1 - 2 b / w)``: a pit shorter than the contact length is bridged (the load change is
     set by geometry, the same every pass); over a longer pit the contact's central strip runs
     free and re-engages at the exit edge with the ball's momentary lateral position and spin.
-    One fitted constant each (``CWRU_PASS_CV_MAX``, ``CWRU_PASS_JITTER_MAX``).
+    One fitted constant each: the [dynamics] keys ``pass_amplitude_cv_max_percent`` and
+    ``pass_delay_sd_max_percent`` of the CWRU cases (the engine applies them,
+    :func:`pass_variation`, to the sensor path of :func:`bearingsim.dynamics.simulate` and of the
+    data sets).
 
 Acquisition
     The 12 kHz CWRU records are acquired with an anti-alias filter (their spectra fall steeply
@@ -44,19 +47,8 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
-from .defect import Spall
-from .errors import InputError
-
-#: pass-to-pass variability constants of the CWRU 6205 pits, fitted by docs/calibrate_cwru.py
-#: (stage E) on the 12 kHz records 130 and 234: the factor's coefficient of variation and the
-#: delay's standard deviation (fraction of the pass interval) where the contact runs free over
-#: the whole pit (unbridged fraction 1)
-CWRU_PASS_CV_MAX = 0.02332
-CWRU_PASS_JITTER_MAX = 0.09582
 
 __all__ = [
-    "CWRU_PASS_CV_MAX",
-    "CWRU_PASS_JITTER_MAX",
     "Contact",
     "PIT_LOCATIONS",
     "contact_of",
@@ -67,6 +59,8 @@ __all__ = [
     "pit_effective_depth",
     "pit_depth_of_solution",
     "unbridged_fraction",
+    "pit_unbridged_fraction",
+    "pass_variation",
     "pass_cv",
     "pass_factors",
     "vary_passes",
@@ -213,6 +207,19 @@ def unbridged_fraction(pit_diameter, contact_semi_axis_b) -> float:
     return max(0.0, 1.0 - 2.0 * b / w) if w > 0.0 else 0.0
 
 
+def pit_unbridged_fraction(sol, bearing, j, location, pit_length) -> float:
+    """:func:`unbridged_fraction` of a pit ``pit_length`` (m) long under ball ``j``'s contact in
+    the healthy (single, host) quasi-static state ``sol``: its outer contact for an outer-race
+    pit, its inner contact for an inner-race pit, the mean of the two for a pit on the ball
+    (which meets both raceways in turn)."""
+    if location in ("outer", "inner"):
+        return unbridged_fraction(pit_length, contact_of(sol, bearing, j, location).b)
+    if location != "ball":
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    return 0.5 * sum(unbridged_fraction(pit_length, contact_of(sol, bearing, j, r, centred=True).b)
+                     for r in ("outer", "inner"))
+
+
 def pass_cv(pit_diameter, contact_semi_axis_b, cv_max) -> float:
     """Coefficient of variation of the per-pass impact factor, ``cv_max`` times
     :func:`unbridged_fraction`."""
@@ -228,6 +235,23 @@ def pass_factors(rng: np.random.Generator, n, cv) -> np.ndarray:
     xi = rng.standard_normal(int(n))
     s2 = np.log1p(cv * cv)
     return np.exp(np.sqrt(s2) * xi - s2)
+
+
+def pass_variation(x, fs, pass_times, cv, jitter, seed):
+    """(varied x, factors, delays): :func:`vary_passes` of ``x`` with log-normal factors of
+    coefficient of variation ``cv`` (:func:`pass_factors`) and Gaussian delays of standard
+    deviation ``jitter`` x the mean pass interval, drawn (factors first, then delays) from
+    ``numpy.random.default_rng(SeedSequence([seed, 9]))``: stream 9 of the run's realism seed,
+    apart from the engine's slip, fluctuation and noise streams.  ``cv = jitter = 0`` returns
+    ``x`` itself (and the draws, unused)."""
+    tp = np.asarray(pass_times, dtype=float)
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 9]))
+    fac = pass_factors(rng, tp.size + 1, cv)
+    T = float(np.mean(np.diff(tp))) if tp.size > 1 else 0.0
+    shifts = float(jitter) * T * rng.standard_normal(tp.size + 1)
+    if cv > 0 or jitter > 0:
+        x = vary_passes(x, fs, tp, fac, shifts)
+    return x, fac, shifts
 
 
 def _ramp(t, edge, width):
@@ -302,11 +326,7 @@ def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
     fs = 1.0 / float(t[1] - t[0])
     a_h = np.asarray(result.housing_acceleration)[:, 0]
     tp = np.asarray(result.pass_times, dtype=float)
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 9]))
-    fac = pass_factors(rng, tp.size + 1, cv)
-    T = float(np.mean(np.diff(tp))) if tp.size > 1 else 0.0
-    shifts = float(jitter) * T * rng.standard_normal(tp.size + 1)
-    a = vary_passes(a_h, fs, tp, fac, shifts) if (cv > 0 or jitter > 0) else a_h
+    a, fac, shifts = pass_variation(a_h, fs, tp, cv, jitter, seed)
     f, z, g = (np.asarray(v) for v in params.modes())
     y = np.asarray(apply_sensor(a, 1.0 / fs, f, z, g))
     noise = getattr(result, "noise", None)
@@ -319,39 +339,37 @@ def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
     return y, fs, labels
 
 
-def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv_max=0.0,
-                    pass_jitter_max=0.0, overrides=None, fs_out=None, progress=False):
+def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv_max=None,
+                    pass_jitter_max=None, overrides=None, fs_out=None, progress=False):
     """Simulate a case and return (record in m/s^2, sample rate, DynamicsResult, labels).
 
-    The [dynamics] settings of ``case`` (engine keys: modes, slip, speed fluctuation, noise),
-    updated by ``overrides`` (SI names as in ``Case.dynamics_settings()``), drive
-    :func:`bearingsim.dynamics.simulate`; :func:`sensor_record` then adds the pass-to-pass
-    variability (``cv`` = ``pass_cv_max``, delays of ``pass_jitter_max`` x T, both times
-    :func:`unbridged_fraction` of the spall length and the contact at the spall) and decimates
-    to ``fs_out``.  ``duration``/``sample_rate``/``seed`` default to the case's.
+    The [dynamics] settings of ``case`` (engine keys: modes, slip, speed fluctuation, noise and
+    the pass-to-pass variability), updated by ``overrides`` (SI names as in
+    ``Case.dynamics_settings()``), drive :func:`bearingsim.dynamics.simulate`; ``pass_cv_max``
+    / ``pass_jitter_max`` (fractions; None: the case's ``pass_amplitude_cv_max_percent`` /
+    ``pass_delay_sd_max_percent``) override the variability maxima.  The record is the run's
+    sensor acceleration, decimated to ``fs_out`` when given; ``labels`` are the run's realism
+    labels (``result.realism``).  ``duration``/``sample_rate``/``seed`` default to the case's.
     """
     from .dynamics import DynamicsParameters, Realism, simulate
 
     d = dict(case.dynamics_settings())
     d.update(overrides or {})
+    if pass_cv_max is not None:
+        d["pass_amplitude_cv_max_percent"] = 100.0 * float(pass_cv_max)
+    if pass_jitter_max is not None:
+        d["pass_delay_sd_max_percent"] = 100.0 * float(pass_jitter_max)
     duration = d["duration"] if duration is None else float(duration)
     sample_rate = d["sample_rate"] if sample_rate is None else float(sample_rate)
     seed = int(d.get("seed", 0)) if seed is None else int(seed)
     params = DynamicsParameters.from_settings(d)
     realism = Realism.from_settings(d)
-    bearing, op, loads, spall = case.bearing(), case.operation(), case.loads(), case.spall()
-    r = simulate(bearing, op, loads, spall, params, duration, sample_rate, theta0=case.cage_angle,
-                 realism=realism, seed=seed, hertz_method=case.hertz_method, record_balls=False,
-                 progress=progress)
-    u = 0.0
-    if spall is not None and (float(pass_cv_max) > 0.0 or float(pass_jitter_max) > 0.0):
-        if not isinstance(spall, Spall) or spall.location != "outer":
-            raise InputError("pass_cv_max / pass_jitter_max (pass-to-pass variability of an EDM pit "
-                             "narrower than the contact) are calibrated for one outer-race spall; "
-                             "pass 0 for inner-race and ball defects")
-        c = contact_at(bearing, op, loads, float(spall.center), case.hertz_method)
-        u = unbridged_fraction(float(spall.length(bearing)), c.b)
-    y, fs, labels = sensor_record(r, params, float(pass_cv_max) * u, seed, fs_out,
-                                  jitter=float(pass_jitter_max) * u)
-    labels["unbridged_fraction"] = u
+    r = simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration, sample_rate,
+                 theta0=case.cage_angle, realism=realism, seed=seed, hertz_method=case.hertz_method,
+                 record_balls=False, progress=progress)
+    y, fs = np.asarray(r.sensor_acceleration), float(sample_rate)
+    if fs_out is not None and float(fs_out) != fs:
+        y, fs = decimate_record(y, fs, fs_out)
+    labels = dict(r.realism)
+    labels.setdefault("unbridged_fraction", 0.0)
     return y, fs, r, labels

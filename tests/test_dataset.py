@@ -278,6 +278,7 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
     machined rule keeps the drawn depth."""
     import h5py
 
+    from bearingsim import realism as rl
     from bearingsim.dataset import pit_depths, slots_of, draw_labels
     from bearingsim.workflows import dataset_case
 
@@ -288,10 +289,15 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
         spec = spec.with_value(k, v)
     lab = draw_labels(spec)
     lab["spall_length_mm"] = [0.007 * 25.4, 0.021 * 25.4]
-    depth, ok = pit_depths(spec, lab, 2, slots_of(lab))
+    depth, ok, unbridged = pit_depths(spec, lab, 2, slots_of(lab))
     want = [load_case(ROOT / "cases" / n).spall().depth for n in ("cwru_6205_or007.toml", "cwru_6205.toml")]
     assert ok.all()
     np.testing.assert_allclose(depth, np.asarray(want, float), rtol=1e-3)
+    # the unbridged fraction 1 - 2b/w of each pit, b from the single healthy solve's contact
+    cal = load_case(ROOT / "cases" / "cwru_6205.toml")
+    b = rl.contact_at(cal.bearing(), cal.operation(), cal.loads(), 0.0).b
+    w = np.array([0.007, 0.021]) * 25.4e-3
+    np.testing.assert_allclose(unbridged, 1.0 - 2.0 * b / w, rtol=1e-9)
     # end to end: the labels carry the effective depth, below the machined 0.2794 mm
     spec = spec.with_value("dataset.duration_s", 0.02).with_value("dynamics.sample_rate_Hz", 12000)
     dataset_case(spec, tmp_path / "pit.h5")
@@ -308,13 +314,53 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
 @pytest.mark.parametrize("name", ["dataset_cwru.toml", "dataset_cwru_4class.toml"])
 def test_shipped_specs_share_the_calibrated_structure(name):
     """The CWRU data set specs carry the calibrated sensor modes, contact damping, slip, noise,
-    geometry and clearance of cases/cwru_6205.toml (docs/calibrate_cwru.py --write keeps them in
+    pass-to-pass variability, geometry and clearance of cases/cwru_6205.toml (docs/calibrate_cwru.py --write keeps them in
     step) and the pit depth rule."""
     spec, cal = load_case(ROOT / "cases" / name), load_case(ROOT / "cases" / "cwru_6205.toml")
     a, b = spec.dynamics_settings(), cal.dynamics_settings()
     for k in ("resonance_frequencies", "resonance_damping_ratios", "resonance_gains", "noise_band"):
         assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), k
-    for k in ("contact_damping_ratio", "slip_percent", "speed_fluctuation_percent", "noise_rms"):
+    for k in ("contact_damping_ratio", "slip_percent", "speed_fluctuation_percent", "noise_rms",
+              "pass_amplitude_cv_max_percent", "pass_delay_sd_max_percent"):
         assert a[k] == b[k], k
     assert spec.data["bearing"] == cal.data["bearing"]
     assert spec.data["dataset"]["depth_rule"] == "pit"
+
+
+def test_dataset_items_carry_the_pass_to_pass_variability_of_a_single_run(tmp_path):
+    """The shipped CWRU spec applies the calibrated pass-to-pass variability to every fault item
+    (scaled by the unbridged fraction of its pit): an item at the calibrated operating point
+    with the 0.021 in pit equals, to float32 storage (rel 1e-6), the single simulation of that
+    pit with the item's seed, depth, Newton steps and substeps (full ball solve, as the batch)
+    with the case's realism; the same single run with the variability off differs by more than
+    10 % of the peak."""
+    from bearingsim import dynamics as dyn
+    from bearingsim.defect import Spall
+
+    spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
+    for k, v in {"dataset.count": 2, "dataset.chunk": 2, "dataset.healthy_fraction": 0.0,
+                 "dataset.speed_rpm": [1797, 1797], "dataset.radial_N": [100, 100],
+                 "dataset.axial_N": [43.7, 43.7], "dataset.spall_length_mm": [0.5334, 0.5334],
+                 "dataset.duration_s": 0.04, "dynamics.sample_rate_Hz": 12000}.items():
+        spec = spec.with_value(k, v)
+    dataset_case(spec, tmp_path / "v.h5")
+    with h5py.File(tmp_path / "v.h5") as f:
+        X, L = f["signals"][()], f["labels"][()]
+        it, sub = int(f.attrs["ball_iterations"]), int(f.attrs["substeps"])
+    assert np.all(L["result"] == 0) and np.all(L["unbridged_fraction"] > 0.5)
+    assert np.all(L["pass_delay_sd_percent"] > 0) and np.all(L["pass_amplitude_cv_percent"] > 0)
+    cal = load_case(ROOT / "cases" / "cwru_6205.toml")
+    b, d = cal.bearing(), cal.dynamics_settings()
+    on = dyn.Realism.from_settings(d)
+    i = 1
+    sp = Spall.from_length(b, 0.0, 0.5334e-3, L["effective_depth_mm"][i] * 1e-3, "rectangular", "outer")
+    kw = dict(seed=int(L["realism_seed"][i]), ball_iterations=it, substeps=sub, ball_solver="full",
+              record_balls=False)
+    args = (b, cal.operation(), cal.loads(), sp, dyn.DynamicsParameters.from_settings(d), 0.04, 12000.0)
+    r = dyn.simulate(*args, realism=on, **kw)
+    peak = np.abs(X[i]).max()
+    np.testing.assert_allclose(X[i], r.sensor_acceleration, rtol=0, atol=1e-6 * peak)
+    assert L["pass_delay_sd_percent"][i] == pytest.approx(r.realism["pass_delay_sd_percent"], rel=1e-12)
+    r0 = dyn.simulate(*args, realism=on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0),
+                      **kw)
+    assert np.abs(X[i] - r0.sensor_acceleration).max() > 0.1 * peak

@@ -7,7 +7,9 @@
   and a pit that takes the whole load unloads the ball (depth = its approach);
 * log-normal factors with mean square 1 and the requested coefficient of variation;
 * pass windows form a partition of unity (all factors 1: the signal is unchanged);
-* an anti-alias decimation keeps a tone in band (1.2 kHz, on a bin) and removes one above the new Nyquist frequency.
+* an anti-alias decimation keeps a tone in band (1.2 kHz, on a bin) and removes one above the new Nyquist frequency;
+* the engine's pass-to-pass variability: scaled by 1 - 2b/w with b from an independent healthy
+  solve, acting on the sensor path only with its labelled draws, off for a bridged pit.
 """
 import types
 
@@ -138,7 +140,8 @@ def test_sensor_record_without_variability_is_the_sensor_path():
 @pytest.mark.parametrize("name, inches", [("cwru_6205_or007.toml", 0.007), ("cwru_6205.toml", 0.021)])
 def test_calibrated_case_depths_are_the_pit_physics(name, inches):
     """The CWRU case files carry the effective depth of their pit (4 significant digits), and
-    the variability constants are those of docs/calibrate_cwru.py (finite, >= 0)."""
+    the outer-race cases the pass-to-pass variability of docs/calibrate_cwru.py (stage E): both
+    maxima set, the delay's s.d. below half the pass interval."""
     from pathlib import Path
 
     from bearingsim.case import load_case
@@ -148,7 +151,8 @@ def test_calibrated_case_depths_are_the_pit_physics(name, inches):
     pit = rl.pit_effective_depth(b, case.operation(), case.loads(), inches * INCH, 0.011 * INCH)
     assert float(case.spall().depth) == pytest.approx(pit.depth, rel=1e-3)
     assert float(case.spall().length(b)) == pytest.approx(inches * INCH, rel=1e-9)
-    assert rl.CWRU_PASS_CV_MAX >= 0.0 and 0.0 <= rl.CWRU_PASS_JITTER_MAX < 0.5
+    d = case.dynamics_settings()
+    assert d["pass_amplitude_cv_max_percent"] > 0.0 and 0.0 < d["pass_delay_sd_max_percent"] < 50.0
 
 
 def test_pit_depth_at_the_inner_race_and_on_a_ball(cwru):
@@ -182,3 +186,91 @@ def test_pit_depth_of_an_unloaded_contact_is_zero():
     """A contact without load (a = 0, delta <= 0) loses nothing over a pit."""
     c = rl.Contact(-1e-7, 0.0, 0.0, 0.0, 0.0, 0.0)
     assert rl.pit_depth(c, 0.2e-3, 0.3e-3, 8e-3).depth == 0.0
+
+
+@pytest.fixture(scope="module")
+def cwru_runs():
+    """The calibrated 0.021 in case, 40 ms at 24 kHz, with its pass-to-pass variability (seed 5)
+    and the same draw with both maxima 0."""
+    from pathlib import Path
+
+    from bearingsim import dynamics as dyn
+    from bearingsim.case import load_case
+
+    case = load_case(Path(__file__).resolve().parents[1] / "cases" / "cwru_6205.toml")
+    d = case.dynamics_settings()
+    on = dyn.Realism.from_settings(d)
+    off = on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0)
+    kw = dict(params=dyn.DynamicsParameters.from_settings(d), duration=0.04, sample_rate=24000.0,
+              seed=5, record_balls=False)
+    return case, on, dyn.simulate_case(case, realism=on, **kw), dyn.simulate_case(case, realism=off, **kw)
+
+
+def test_engine_pass_variability_scales_with_the_unbridged_fraction(cwru_runs):
+    """The engine's labels: c.v. and delay s.d. = the [dynamics] maxima x (1 - 2b/w), b the
+    outer contact's semi-axis of the ball at the pit in the healthy state read through the
+    single healthy solve of realism.contact_at (the engine takes its own zero-depth solve)."""
+    case, on, r, _ = cwru_runs
+    b = rl.contact_at(case.bearing(), case.operation(), case.loads(), float(case.spall().center)).b
+    u = 1.0 - 2.0 * b / (0.021 * INCH)
+    lab = r.realism
+    assert lab["unbridged_fraction"] == pytest.approx(u, rel=1e-9)
+    assert lab["pass_amplitude_cv_percent"] == pytest.approx(on.pass_amplitude_cv_max_percent * u, rel=1e-9)
+    assert lab["pass_delay_sd_percent"] == pytest.approx(on.pass_delay_sd_max_percent * u, rel=1e-9)
+    assert lab["pass_factors"].size == lab["pass_shifts"].size == r.pass_times.size + 1
+
+
+def test_engine_pass_variability_acts_on_the_sensor_path_only(cwru_runs):
+    """With the variability on, the sensor record is the sensor modes (apply_sensor) of the ODE's
+    housing acceleration varied pass by pass with the labelled draws (vary_passes), plus the
+    same noise; the motion, the housing acceleration and the noise equal those of the run with
+    the variability off (the slip/noise streams do not move), and the records differ."""
+    from bearingsim.sensor import apply_sensor
+
+    case, on, r, r0 = cwru_runs
+    fs = 24000.0
+    lab = r.realism
+    for k in ("housing_acceleration", "ring_displacement", "noise", "cage_angle"):
+        np.testing.assert_array_equal(getattr(r, k), getattr(r0, k))
+    a = rl.vary_passes(r.housing_acceleration[:, 0], fs, r.pass_times, lab["pass_factors"], lab["pass_shifts"])
+    f, z, g = (np.asarray(v) for v in case_params(case).modes())
+    ref = np.asarray(apply_sensor(a, 1 / fs, f, z, g)) + r.noise
+    scale = np.abs(ref).max()
+    np.testing.assert_allclose(r.sensor_acceleration, ref, rtol=0, atol=1e-12 * scale)
+    assert np.abs(r.sensor_acceleration - r0.sensor_acceleration).max() > 0.05 * scale
+
+
+def case_params(case):
+    from bearingsim.dynamics import DynamicsParameters
+
+    return DynamicsParameters.from_settings(case.dynamics_settings())
+
+
+def test_engine_pass_variability_off_for_a_bridged_pit(cwru_runs):
+    """A pit shorter than the contact (w < 2b: unbridged fraction 0) is bridged every pass: with
+    the maxima on, the record is the one without them (the engine's own sensor path)."""
+    from bearingsim import dynamics as dyn
+    from bearingsim.defect import Spall
+
+    case, on, _, _ = cwru_runs
+    b = case.bearing()
+    sp = case.spall()
+    short = Spall.from_length(b, sp.center, 0.1e-3, sp.depth, sp.profile, "outer")   # 2b ~ 0.15 mm
+    kw = dict(params=case_params(case), duration=0.02, sample_rate=24000.0, seed=5, record_balls=False)
+    r1 = dyn.simulate(b, case.operation(), case.loads(), short, realism=on, **kw)
+    r0 = dyn.simulate(b, case.operation(), case.loads(), short,
+                      realism=on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0), **kw)
+    assert r1.realism["unbridged_fraction"] == 0.0
+    np.testing.assert_array_equal(r1.sensor_acceleration, r0.sensor_acceleration)
+
+
+def test_engine_pass_variability_needs_one_defect(cwru_runs):
+    from bearingsim import dynamics as dyn
+    from bearingsim.defect import Spall
+    from bearingsim.errors import InputError
+
+    case, on, _, _ = cwru_runs
+    b = case.bearing()
+    two = (case.spall(), Spall.from_length(b, 1.0, 0.5e-3, 1e-6, "rectangular", "outer"))
+    with pytest.raises(InputError, match="one defect"):
+        dyn.simulate(b, case.operation(), case.loads(), two, realism=on, duration=0.01, sample_rate=24000.0)

@@ -340,6 +340,16 @@ SCHEMA: dict[str, Section] = {
             "slip_percent": _num("random slip: each ball-pitch advance of the cage takes (1 + eps) times "
                                  "its nominal time, eps ~ N(0, (slip_percent/100)^2) (the jitter of the "
                                  "ball-pass interval)", "", 0.0, ge=0, lt=20),
+            "pass_amplitude_cv_max_percent": _num(
+                "pass-to-pass variability of a pit's impacts: coefficient of variation of a per-pass "
+                "factor on the housing acceleration (log-normal, mean square 1) where the contact cannot "
+                "bridge the pit at all; scaled by the pit's unbridged fraction max(0, 1 - 2b/w) (b the "
+                "contact's semi-axis along the track, w the pit length; bearingsim.realism)",
+                "", 0.0, ge=0, lt=100),
+            "pass_delay_sd_max_percent": _num(
+                "pass-to-pass variability of a pit's impacts: standard deviation of a per-pass delay "
+                "of the housing acceleration, % of the pass interval, where the contact cannot bridge "
+                "the pit at all; scaled like pass_amplitude_cv_max_percent", "", 0.0, ge=0, lt=50),
             "speed_fluctuation_percent": _num("RMS fluctuation of the shaft speed", "", 0.0, ge=0, lt=50),
             "speed_fluctuation_bandwidth_Hz": _num("bandwidth B of the speed fluctuation (8 random-phase "
                                                    "sinusoids, frequencies uniform in (0, B])", "Hz", 5.0, gt=0),
@@ -347,7 +357,7 @@ SCHEMA: dict[str, Section] = {
                                    "CWRU normal drive-end baseline is 0.07 g = 0.686 m/s^2)", "m_s2", 0.0, ge=0),
             "noise_band_Hz": Key("range", "band [lo, hi] of the measurement noise (white when absent)", "Hz",
                                  OPTIONAL, ge=0),
-            "seed": _int("seed of the realism draws (slip, speed fluctuation, noise)", 0, ge=0),
+            "seed": _int("seed of the realism draws (slip, speed fluctuation, noise, pass-to-pass variability)", 0, ge=0),
             "rtol": _num("relative tolerance of the adaptive reference integration (the default "
                          "fixed-step integration does not use it)", "", 1e-5, gt=0, lt=1),
             "atol": _num("absolute tolerance of the time integration, on displacements in um and "

@@ -32,8 +32,8 @@ from .model import DynamicModel, build_model, choose_substeps, initial_state, li
 from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
 
 # ------------------------------------------------------------------------- entry points
-from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, simulate,
-                       simulate_case, spin_ratio)
+from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
+                       simulate_case, spin_ratio, unbridged_of, vary_sensor)
 from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
                     simulate_batch)
 
@@ -51,6 +51,7 @@ __all__ = [
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
+    "load_zone_centre", "unbridged_of", "vary_sensor",
     "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
     "simulate_batch",
 ]

@@ -24,9 +24,9 @@ from ..xla import jit
 from .ball_force import ITER_CHOICES, choose_ball_iterations, next_iterations
 from .integrate import check_scheme, run_fixed, time_grid
 from .model import build_model, choose_substeps, initial_state, linear_modes
-from .motion import defect_edge_times, draw_motion, motion_at, motion_labels, seed_streams
+from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at, motion_labels, seed_streams
 from .parameters import RESULTS, DynamicsParameters, Realism
-from .simulate import characteristic_frequencies, rectangular, slip_reference, spin_ratio
+from .simulate import characteristic_frequencies, rectangular, slip_reference, spin_ratio, vary_sensor
 
 __all__ = ["DynamicsBatchResult", "defect_slots", "extreme_items", "batch_settings", "quasi_static_batch",
            "simulate_batch"]
@@ -142,7 +142,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
                    profile="rectangular", params: DynamicsParameters | None = None, duration=0.1,
                    sample_rate=48000.0, theta0=0.0, *, location="outer", slots=None,
                    realism: Realism | None = None, seeds=None, control="outer", hertz_method="exact",
-                   scheme="newmark", substeps=None, ball_iterations=None) -> DynamicsBatchResult:
+                   scheme="newmark", substeps=None, ball_iterations=None, unbridged=None) -> DynamicsBatchResult:
     """N simulations in lockstep (vmap over items of the fixed-step loop): same bearing (Z),
     defect profile, duration and sample rate.
 
@@ -151,13 +151,19 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     ball pit's ``spall_center`` is its spin angle, on ball 0); ``slots`` the locations the
     compiled program carries (:func:`defect_slots`; pass all a data set uses so that every
     chunk shares one program); ``params`` fields may be scalars or (N,) ((N, M) for the modes);
-    ``seeds`` (N,) the items' realism seeds (default 0..N-1).  Never raises for an item:
+    ``seeds`` (N,) the items' realism seeds (default 0..N-1).  ``unbridged`` (N,): each item's
+    pit's unbridged fraction (:func:`bearingsim.realism.pit_unbridged_fraction`, needed when
+    ``realism`` has the pass-to-pass variability on; :func:`bearingsim.dynamics.vary_sensor`).  Never raises for an item:
     ``result`` is per item.  ``ball_iterations``/``substeps`` None: :func:`batch_settings` on
     the extreme items of each location (:func:`extreme_items`), the largest count."""
     check_scheme(scheme)
     realism = Realism() if realism is None else realism
     loads = jnp.asarray(loads, jnp.float64)
     n = loads.shape[0]
+    if realism.pass_variation and unbridged is None:
+        raise InputError("simulate_batch: the pass-to-pass variability is on (Realism."
+                         "pass_amplitude_cv_max_percent / pass_delay_sd_max_percent) but no unbridged "
+                         "fraction was given; pass unbridged=(N,) (bearingsim.realism.pit_unbridged_fraction)")
     bc = lambda v: jnp.broadcast_to(jnp.asarray(v, jnp.float64), (n,))
     params = DynamicsParameters() if params is None else params
     f, z, g = params.modes()
@@ -209,12 +215,16 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     finite = np.all(np.isfinite(y), axis=(1, 2)) & np.all(np.isfinite(sens), axis=1)
     code = np.where((code == 0) & ~finite, int(RESULTS.nonfinite), code)
     sens = np.where(code[:, None] == 0, sens, 0.0)        # a failed item is flagged, never used
-    labels = []
+    labels = [motion_labels(m, realism) for m in motions]
+    if realism.pass_variation:
+        active = [tuple(sp for sp in items[i] if sp.location == loc[i]) for i in range(n)]
+        passes = [defect_pass_times(m, active[i], ts[-1], k_spin[i]) for i, m in enumerate(motions)]
+        u = np.where(code == 0, np.broadcast_to(np.asarray(unbridged, float), (n,)), 0.0)
+        sens = vary_sensor(ah[..., 0], sens, fs, passes, realism, u, seeds, params.modes(), labels)
     for i, m in enumerate(motions):
         if realism.noise_rms > 0.0:
             sens[i] += sensor_mod.measurement_noise(seed_streams(int(seeds[i]))[3], T, realism.noise_rms, fs,
                                                     realism.noise_band)
-        labels.append(motion_labels(m, realism))
     rel = np.stack([y[..., 0] - y[..., 3], y[..., 1] - y[..., 4], y[..., 2]], axis=-1)
     wc = np.where(okc, omega_c, np.nan)
     return DynamicsBatchResult(ts, sens, rel, code.astype(np.int32), np.full(n, nsteps), wc,

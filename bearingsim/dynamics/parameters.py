@@ -90,13 +90,24 @@ class DynamicsParameters(eqx.Module):
 class Realism(NamedTuple):
     """Seeded ingredients of real records (all off by default).  ``noise_rms`` in m/s^2 (the
     CWRU normal drive-end baseline is 0.07 g = 0.686 m/s^2); ``noise_band`` (lo, hi) Hz or None
-    (white)."""
+    (white).  ``pass_amplitude_cv_max_percent`` / ``pass_delay_sd_max_percent``: pass-to-pass
+    variability of a pit's impacts (coefficient of variation of a per-pass factor; standard
+    deviation of a per-pass delay, % of the pass interval) where the contact cannot bridge the
+    pit at all; a run scales both by the pit's unbridged fraction
+    (:func:`bearingsim.realism.pit_unbridged_fraction`)."""
 
     slip_percent: float = 0.0
     speed_fluctuation_percent: float = 0.0
     speed_fluctuation_bandwidth_Hz: float = 5.0
     noise_rms: float = 0.0
     noise_band: tuple | None = None
+    pass_amplitude_cv_max_percent: float = 0.0
+    pass_delay_sd_max_percent: float = 0.0
+
+    @property
+    def pass_variation(self) -> bool:
+        """True when the pass-to-pass variability is on."""
+        return self.pass_amplitude_cv_max_percent > 0.0 or self.pass_delay_sd_max_percent > 0.0
 
     @classmethod
     def from_settings(cls, d: dict) -> "Realism":
@@ -104,4 +115,6 @@ class Realism(NamedTuple):
         band = d.get("noise_band")
         return cls(float(d.get("slip_percent", 0.0)), float(d.get("speed_fluctuation_percent", 0.0)),
                    float(d.get("speed_fluctuation_bandwidth", 5.0)), float(d.get("noise_rms", 0.0)),
-                   None if band is None else tuple(float(v) for v in band))
+                   None if band is None else tuple(float(v) for v in band),
+                   float(d.get("pass_amplitude_cv_max_percent", 0.0)),
+                   float(d.get("pass_delay_sd_max_percent", 0.0)))

@@ -21,6 +21,7 @@ from ..errors import InputError
 from ..hertz import stiffness_curve
 from ..jones import solve
 from ..kinematics import Operation, defect_frequencies
+from ..realism import pass_variation, pit_unbridged_fraction
 from ..xla import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
@@ -29,7 +30,8 @@ from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "characteristic_frequencies", "spin_ratio", "slip_reference",
-           "rectangular", "ball_records", "simulate", "simulate_case"]
+           "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "vary_sensor", "simulate",
+           "simulate_case"]
 
 
 def characteristic_frequencies(bearing, op, sol):
@@ -72,6 +74,62 @@ def slip_reference(defects):
 def rectangular(defects):
     """The defects with a rectangular profile (their edges are integrated exactly)."""
     return tuple(sp for sp in defects if sp.profile == "rectangular")
+
+
+def load_zone_centre(loads) -> float:
+    """Azimuth (rad) of the radial load [Fx, Fy] (0 for a purely axial load): where an inner-race
+    pit meets its strongest contacts."""
+    F = np.asarray(loads, float)
+    return float(np.arctan2(F[1], F[0])) if np.hypot(F[0], F[1]) > 0.0 else 0.0
+
+
+def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
+    """(unbridged fraction, ok) of the one defect in ``defects``, taken as a round pit of its
+    arc length under the healthy contact (:func:`bearingsim.realism.pit_unbridged_fraction`):
+    the outer contact of the ball at an outer pit, the inner contact of the ball at the load
+    zone's centre for an inner pit, both for a ball pit.  The healthy state is the defective
+    solve's own program with depth 0 (no compilation).  ``ok`` False: it did not converge."""
+    if len(defects) != 1:
+        raise InputError("the pass-to-pass variability ([dynamics] pass_amplitude_cv_max_percent, "
+                         f"pass_delay_sd_max_percent) is defined for one defect, got {len(defects)}; "
+                         "set both to 0 for several defects")
+    sp = defects[0]
+    centre = float(sp.center) if sp.location == "outer" else load_zone_centre(loads)
+    healthy = Spall(sp.center, sp.extent, 0.0, sp.profile, sp.location, sp.ball)
+    sol = solve(bearing, op, loads, cage_angle=centre, spall=healthy, hertz_method=hertz_method, throw=False)
+    if int(sol.result) != 0:
+        return 0.0, False
+    host = jax.tree_util.tree_map(np.asarray, sol)
+    j = int(np.argmin(np.abs(np.angle(np.exp(1j * (host.azimuth - centre))))))
+    return pit_unbridged_fraction(host, bearing, j, sp.location, float(sp.length(bearing))), True
+
+
+def vary_sensor(a_h, sens, fs, pass_times, realism, unbridged, seeds, modes, labels=None):
+    """Sensor signals (N, T) with the pass-to-pass variability of a pit's impacts: each item's
+    housing acceleration ``a_h`` (N, T) (x) varied pass by pass
+    (:func:`bearingsim.realism.pass_variation`: c.v. and delay s.d. the realism's maxima times
+    the item's unbridged fraction, drawn from its seed; ``pass_times`` N arrays) and put through
+    the sensor modes ``(f, zeta, g)`` ((M,) or (N, M); :func:`bearingsim.sensor.apply_sensor_batch`,
+    the input linear between samples, one program per N).  Rows with ``unbridged`` 0 keep
+    ``sens``.  The variability is a per-pass effective depth and exit time acting on the sensor
+    path only: displacements and housing acceleration stay the ODE's.  ``labels`` (N dicts)
+    get each item's ``unbridged_fraction``, ``pass_amplitude_cv_percent``,
+    ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``."""
+    u = np.asarray(unbridged, float)
+    a = np.array(a_h, dtype=float)
+    out = np.array(sens, dtype=float)
+    for i in range(a.shape[0]):
+        cv = 0.01 * realism.pass_amplitude_cv_max_percent * u[i]
+        jit = 0.01 * realism.pass_delay_sd_max_percent * u[i]
+        a[i], fac, shifts = pass_variation(a[i], fs, pass_times[i], cv, jit, int(seeds[i]))
+        if labels is not None:
+            labels[i].update(unbridged_fraction=float(u[i]), pass_amplitude_cv_percent=100.0 * cv,
+                             pass_delay_sd_percent=100.0 * jit, pass_factors=fac, pass_shifts=shifts)
+    if np.any(u > 0.0):
+        f, z, g = (np.asarray(v) for v in modes)
+        y = np.asarray(sensor_mod.apply_sensor_batch(a, 1.0 / fs, f, z, g))
+        out = np.where((u > 0.0)[:, None], y, out)
+    return out
 
 
 class DynamicsResult(NamedTuple):
@@ -154,7 +212,8 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     outer or inner raceway or a ball, or a tuple of them (at t = 0: an inner spall then turns
     with the shaft, a ball pit with its ball), ``duration`` (s), ``sample_rate`` (Hz),
     ``theta0`` the cage angle at t = 0 (rad); ``realism`` (:class:`Realism`, seeded by
-    ``seed``): slip, speed fluctuation, noise.  ``scheme`` "newmark" | "heun" | "rk4",
+    ``seed``): slip, speed fluctuation, noise, and the pass-to-pass variability of a pit's
+    impacts (:func:`vary_sensor`, scaled by :func:`unbridged_of`; in the sensor path).  ``scheme`` "newmark" | "heun" | "rk4",
     ``substeps`` steps per sample (or "auto"), ``ball_iterations`` Newton steps per ball (or
     "auto": :func:`choose_ball_iterations`).  ``integrator="adaptive"``: the diffrax reference
     (``rtol``/``atol`` on displacements in um and velocities in mm/s; sensor modes in the ODE,
@@ -184,6 +243,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=defects or None, hertz_method=hertz_method,
                 throw=False)
     code = RESULTS.successful if int(sol.result) == 0 else RESULTS.initial_state
+    u = 0.0
+    if realism.pass_variation and defects:
+        u, u_ok = unbridged_of(bearing, op, loads, defects, hertz_method)
+        code = code if u_ok else (code or RESULTS.initial_state)
     freqs, a_m = characteristic_frequencies(bearing, op, sol)
     k_spin = spin_ratio(bearing, a_m)
     err = 0.0
@@ -246,13 +309,17 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
     labels = motion_labels(m, realism)
     labels["ball_solver_error"] = float(err)
+    pass_times = defect_pass_times(m, defects, ts[-1], k_spin)
+    if realism.pass_variation and code == RESULTS.successful:
+        sens = vary_sensor(ah[None, :, 0], sens[None], fs, [pass_times], realism, [u], [seed], params.modes(),
+                           [labels])[0]
     return DynamicsResult(
         time=ts, cage_angle=theta, shaft_speed=omega, ring_displacement=rel,
         shaft_displacement=y[:, 0:3], housing_displacement=y[:, 3:5], housing_acceleration=ah,
         sensor_acceleration=sens + noise, noise=noise, Q_inner=balls[0], Q_outer=balls[1],
         alpha_inner=balls[2], alpha_outer=balls[3], result=int(code), num_steps=int(nsteps),
         frequencies=freqs, contact_angle=a_m, jump_times=jumps,
-        pass_times=defect_pass_times(m, defects, ts[-1], k_spin), quasi_static=sol,
+        pass_times=pass_times, quasi_static=sol,
         contact_damping=np.asarray(model.contact_damping), ball_iterations=int(ball_iterations),
         substeps=substeps, scheme=scheme, realism=labels, shaft_angle=phi, spin_ratio=k_spin,
         ball_solver_stats=solver_stats)
