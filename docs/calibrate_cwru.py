@@ -374,7 +374,8 @@ def _block(text, name):
 
 
 def sync_twins():
-    """The inner-race and ball twins share the outer case's [bearing], [load] and [dynamics]."""
+    """The inner-race and ball twins share the outer case's [bearing], [load] and [dynamics],
+    with the pass-to-pass variability off (fitted on the outer-race records only)."""
     src = SIZES[0.021].read_text()
     for p in TWINS:
         t = p.read_text()
@@ -384,6 +385,8 @@ def sync_twins():
             new = src[a:b] if b2 < len(t) else src[a:b].rstrip("\n") + "\n"
             t = t[:a2] + new + t[b2:]
         p.write_text(t)
+        write_case(p, {("dynamics", k): ("0", "off: stage E fitted it on outer-race pits only")
+                       for k in ("pass_amplitude_cv_max_percent", "pass_delay_sd_max_percent")})
         log(f"    synced {p.relative_to(REPO)} ([bearing], [load], [dynamics])")
 
 
