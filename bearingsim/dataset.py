@@ -346,9 +346,14 @@ def _run_settings(case, lab, extent, depth, center, profile, fs, params):
     return it, max(subs, default=1)
 
 
+#: layout of the chunk files (2: with the pass-to-pass variability labels); a partial folder of
+#: another layout is refused like one of another spec
+CHUNK_FORMAT = 2
+
+
 def _spec_record(case, ds, n, T, fs, chunk):
-    return {"bearingsim_version": __version__, "case_toml": case.text, "seed": int(ds["seed"]),
-            "count": n, "samples": T, "sample_rate_Hz": fs, "chunk": chunk}
+    return {"bearingsim_version": __version__, "chunk_format": CHUNK_FORMAT, "case_toml": case.text,
+            "seed": int(ds["seed"]), "count": n, "samples": T, "sample_rate_Hz": fs, "chunk": chunk}
 
 
 def _open_partial(folder: Path, spec: dict, settings):
