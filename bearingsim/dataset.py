@@ -60,7 +60,7 @@ from .case import check_sampling
 from .case.units import from_si, to_si
 from .errors import BearingsimError, InputError, ResultCode
 
-__all__ = ["CLASSES", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
+__all__ = ["CLASSES", "SPLITS", "transfer_paths", "item_background", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
            "item_seeds", "make_dataset", "partial_path", "pit_depths", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
@@ -89,7 +89,16 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "pass_delay_sd_percent": ("<f8", "%"),
     "speed_fluctuation_percent": ("<f8", "%"),
     "noise_rms_m_s2": ("<f8", "m/s^2"),
+    "split": ("<i1", "-"),
+    "signal_gain": ("<f8", "-"),
+    "strike_probability": ("<f8", "-"),
+    "background_noise_rms_m_s2": ("<f8", "m/s^2"),
+    "background_shaft_rms_m_s2": ("<f8", "m/s^2"),
+    "background_line_rms_m_s2": ("<f8", "m/s^2"),
+    "background_knock_rate_Hz": ("<f8", "Hz"),
 }
+#: names of the label field ``split`` (assigned per item and class: ``dataset.split_fractions``)
+SPLITS = ("train", "validation", "test")
 LABEL_DTYPE = np.dtype([(k, v[0]) for k, v in LABEL_FIELDS.items()])
 
 #: ranges of [dataset], in the order they are drawn
@@ -198,7 +207,82 @@ def draw_labels(case) -> np.ndarray:
     lab["healthy"] = healthy
     lab["spall_length_mm"][healthy] = 0.0
     lab["spall_depth_mm"][healthy] = 0.0
+    _draw_randomisation(ds, lab)
     return lab
+
+
+def _logu(rng, lo, hi, n):
+    return np.full(n, float(lo)) if lo == hi else np.exp(rng.uniform(np.log(lo), np.log(hi), n))
+
+
+def _draw_randomisation(ds, lab):
+    """The domain-randomisation labels, from their own stream (SeedSequence([seed, 1001])) so that
+    the draws above stay what they always were: outer-pit positions, signal gain, ball strike
+    probability, the train / validation / test split per class."""
+    n = lab.size
+    rng = np.random.default_rng(np.random.SeedSequence([int(ds["seed"]), 1001]))
+    pos = ds.get("outer_center_positions_deg")
+    outer = lab["fault_class"] == 1
+    choice = rng.integers(0, len(pos) if pos else 1, n)
+    if pos:
+        lab["spall_center_deg"][outer] = np.asarray(pos, float)[choice[outer]]
+    lab["signal_gain"] = _logu(rng, *ds.get("signal_gain", (1.0, 1.0)), n)
+    lo, hi = ds.get("ball_strike_probability", (1.0, 1.0))
+    p = rng.uniform(lo, hi, n) if lo != hi else np.full(n, float(lo))
+    lab["strike_probability"] = np.where(lab["fault_class"] == 3, p, 1.0)
+    frac = np.asarray(ds.get("split_fractions", (0.7, 0.15, 0.15)), float)
+    frac = frac / frac.sum()
+    for c in range(len(CLASSES)):
+        idx = np.flatnonzero(lab["fault_class"] == c)
+        idx = idx[rng.permutation(idx.size)]
+        cuts = np.round(np.cumsum(frac)[:-1] * idx.size).astype(int)
+        for part, block in enumerate(np.split(idx, cuts)):
+            lab["split"][block] = part
+
+
+def transfer_paths(case, lab) -> np.ndarray:
+    """(N, M, 3) sensor modes of every item (frequency Hz, damping ratio, gain): the [dynamics]
+    modes, or, per ``[dataset] resonance_*`` range given, drawn per item and mode (frequency and
+    gain log-uniform, damping uniform) from SeedSequence([seed, 1002])."""
+    ds, d = _settings(case), case.dynamics_settings()
+    params = dynamics.DynamicsParameters.from_settings(d)
+    f, z, g = (np.asarray(v, float) for v in params.modes())
+    n, M = lab.size, f.shape[-1]
+    out = np.stack([np.broadcast_to(v, (n, M)) for v in (f, z, g)], -1).copy()
+    rng = np.random.default_rng(np.random.SeedSequence([int(ds["seed"]), 1002]))
+    for j, (key, log) in enumerate((("resonance_frequency_Hz", True), ("resonance_damping_ratio", False),
+                                    ("resonance_gain", True))):
+        r = ds.get(key)
+        if r is not None:
+            lo, hi = r
+            v = _logu(rng, lo, hi, n * M) if log else rng.uniform(lo, hi, n * M)
+            out[..., j] = np.sort(v.reshape(n, M), axis=1) if j == 0 else v.reshape(n, M)
+    return out
+
+
+def item_background(case, ds, fs):
+    """A function (realism seed, shaft Hz, T) -> (background record, labels) of the data set's
+    ``background`` setting (None for "none")."""
+    from . import background as bgm
+
+    kind = ds.get("background", "none")
+    if kind == "none":
+        return None
+    if kind == "machine":
+        sec = case.si("background") if "background" in case.data else {}
+        fixed = bgm.Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
+                               tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
+                               tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels_dB") or ()),
+                               tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
+                               float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
+                               float(sec.get("knock_damping_ratio", 0.05)))
+    rms = tuple(ds.get("background_rms_m_s2", (0.2, 2.0)))
+
+    def draw(seed, shaft_hz, T):
+        rng = np.random.default_rng(np.random.SeedSequence([int(seed), 11]))
+        bg = fixed if kind == "machine" else bgm.random_background(rng, fs, {"noise_rms_m_s2": rms})
+        return bgm.background_signal(rng, T, fs, shaft_hz, bg), bg.as_labels()
+    return draw
 
 
 def _order(fault_class: np.ndarray) -> np.ndarray:
@@ -266,10 +350,10 @@ def item_seeds(seed, n) -> np.ndarray:
 def pit_depths(case, lab, chunk, slots, profile="rectangular"):
     """(depth in m, ok, unbridged fraction) per item for ``[dataset] depth_rule = "pit"`` (and
     for the pass-to-pass variability, which scales with the unbridged fraction of the item's
-    pit under the same contact, :func:`bearingsim.realism.pit_unbridged_fraction`): every fault item's defect
+    pit under the same contact, :func:`bearingsim.pit.pit_unbridged_fraction`): every fault item's defect
     is a round EDM pit of diameter ``spall_length_mm`` and machined depth ``spall_depth_mm``
     narrower than the ball's contact ellipse, and the simulation takes the depth that loses the
-    same Hertz load (:func:`bearingsim.realism.pit_depth_of_solution`: the ball keeps rolling on
+    same Hertz load (:func:`bearingsim.pit.pit_depth_of_solution`: the ball keeps rolling on
     the raceway beside the pit; the groove rule of the machined depth would let it drop by its
     sag over the chord, ~w^2 / 4D, and its impacts grow with the square of the size).
 
@@ -283,7 +367,7 @@ def pit_depths(case, lab, chunk, slots, profile="rectangular"):
     import jax.numpy as jnp
 
     from .kinematics import Operation
-    from .realism import pit_depth_of_solution, pit_unbridged_fraction
+    from .pit import pit_depth_of_solution, pit_unbridged_fraction
 
     b = case.bearing()
     n = lab.size
@@ -348,7 +432,7 @@ def _run_settings(case, lab, extent, depth, center, profile, fs, params):
 
 #: layout of the chunk files (2: with the pass-to-pass variability labels); a partial folder of
 #: another layout is refused like one of another spec
-CHUNK_FORMAT = 2
+CHUNK_FORMAT = 3
 
 
 def _spec_record(case, ds, n, T, fs, chunk):
@@ -388,20 +472,37 @@ def _chunk_file(folder: Path, k: int) -> Path:
     return folder / f"chunk_{k:06d}.npz"
 
 
+_BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
+                      "background_knock_rate_Hz")
 _CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
-                 "pass_amplitude_cv_percent")
+                 "pass_amplitude_cv_percent") + _BACKGROUND_FIELDS
 
 
 def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
-                    duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged):
+                    duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged, modes=None, background=None):
+    import equinox as eqx
+
     m = idx.size
     pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - m)])
+    if modes is not None:
+        params = eqx.tree_at(lambda p: (p.resonance_frequency, p.resonance_damping_ratio, p.resonance_gain),
+                             params, tuple(np.asarray(modes[pad][..., j]) for j in range(3)))
+    strike = lab["strike_probability"][pad]
     res = dynamics.simulate_batch(
         b, lab["speed_rpm"][pad], loads[pad], center[pad], extent[pad], depth[pad], profile, params,
         duration, fs, case.cage_angle, location=loc[pad], slots=slots, realism=realism, seeds=seeds[pad],
         control=case.data["operation"]["raceway_control"], hertz_method=case.hertz_method,
-        ball_iterations=it, substeps=sub, unbridged=unbridged[pad])
-    a = np.asarray(res.sensor_acceleration)[:m]
+        ball_iterations=it, substeps=sub, unbridged=unbridged[pad],
+        strike=strike if np.any(strike < 1.0) else None)
+    a = np.asarray(res.sensor_acceleration)[:m] * lab["signal_gain"][idx][:, None]
+    bg_labels = {k: np.zeros(m) for k in _BACKGROUND_FIELDS}
+    if background is not None:
+        T = a.shape[1]
+        for j, i in enumerate(idx):
+            x, lb = background(seeds[i], lab["speed_rpm"][i] / 60.0, T)
+            a[j] += x
+            for k in _BACKGROUND_FIELDS:
+                bg_labels[k][j] = lb[k]
     code = np.asarray(res.result)[:m].astype(np.int32)
     finite = np.all(np.isfinite(a), axis=1)
     code = np.where((code == 0) & ~finite, int(DatasetResult.nonfinite_signal), code)
@@ -414,10 +515,11 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
             for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
     return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
                 pass_jitter_percent=jitter, pass_delay_sd_percent=delay, pass_amplitude_cv_percent=cv,
+                **bg_labels,
                 **{k: np.where(np.isfinite(v) & ok, v, 0.0) for k, v in freq.items()})
 
 
-def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme, chunks):
+def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme, chunks, modes):
     """Write the HDF5 file from the finished chunks, in item order (atomically)."""
     import h5py
 
@@ -455,6 +557,10 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
                 with np.load(_chunk_file(folder, k)) as c:
                     for j, i in enumerate(c["index"]):
                         sig[i] = c["signals"][j]
+            tp = f.create_dataset("transfer_path", data=modes)
+            tp.attrs["units"] = "Hz, -, -"
+            tp.attrs["description"] = ("(N, M, 3): every item's sensor modes: frequency (Hz), damping "
+                                       "ratio, gain (domain randomisation: [dataset] resonance_*)")
             tm = f.create_dataset("time", data=ts)
             tm.attrs["units"] = "s"
             lb = f.create_dataset("labels", data=lab)
@@ -522,6 +628,8 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     lab["slip_percent"] = realism.slip_percent
     lab["speed_fluctuation_percent"] = realism.speed_fluctuation_percent
     lab["noise_rms_m_s2"] = realism.noise_rms
+    modes = transfer_paths(case, lab)
+    background = item_background(case, ds, fs)
     order = _order(lab["fault_class"])
     chunks = -(-n // chunk)
     folder = partial_path(path)
@@ -542,12 +650,12 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
                 idx = order[k * chunk:(k + 1) * chunk]
                 out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
                                       params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok,
-                                      unbridged)
+                                      unbridged, modes, background)
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
                 done += idx.size
                 bar.update(idx.size)
             bar.close()
-            _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, "newmark", chunks)
+            _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, "newmark", chunks, modes)
             shutil.rmtree(folder, ignore_errors=True)
     except (_Stop, KeyboardInterrupt) as e:
         if bar is not None:

@@ -424,6 +424,34 @@ SCHEMA: dict[str, Section] = {
             "ball_spin_angle_deg": _range("pit spin angle range at t = 0 (0: in the outer contact, 180: "
                                           "in the inner contact); the pitted ball is ball 0",
                                           "deg", [0.0, 360.0], ge=-360, le=360),
+            "resonance_frequency_Hz": _range("domain randomisation of the transfer path: every sensor "
+                                             "mode's frequency of every item drawn log-uniform in this "
+                                             "range (absent: the [dynamics] modes for all items)", "Hz",
+                                             OPTIONAL, gt=0),
+            "resonance_damping_ratio": _range("every sensor mode's damping ratio, drawn uniform (absent: "
+                                              "the [dynamics] values)", "", OPTIONAL, gt=0, lt=1),
+            "resonance_gain": _range("every sensor mode's gain, drawn log-uniform (absent: the "
+                                     "[dynamics] values)", "", OPTIONAL, gt=0),
+            "signal_gain": _range("factor on each item's bearing signal (the level of the transfer "
+                                  "path, unknown on a new machine), drawn log-uniform", "", [1.0, 1.0], gt=0),
+            "ball_strike_probability": _range("probability that a ball pit strikes the raceways on a "
+                                              "pass (its spin axis wanders), drawn uniform per item; "
+                                              "1: every pass", "", [1.0, 1.0], ge=0, le=1),
+            "outer_center_positions_deg": Key("numbers", "outer-race pits at these load-zone positions "
+                                              "only (0: load-zone centre, the CWRU 6:00; 90 / -90: 3:00 / "
+                                              "9:00; 180: 12:00), each item one of them at random; absent: "
+                                              "spall_center_deg's range", "deg", OPTIONAL),
+            "background": _enum("the machine's own vibration added to every item (bearingsim.background): "
+                                "none; random (drawn per item from the ranges of "
+                                "bearingsim.background.BACKGROUND_DEFAULTS and background_rms_m_s2: shaft and "
+                                "supply-frequency lines, shaped broadband noise modulated at the shaft "
+                                "rate, random knocks); machine (the [background] section, e.g. from "
+                                "bearingsim calibrate)", ("none", "random", "machine"), "none"),
+            "background_rms_m_s2": _range("broadband background RMS range of background = \"random\" "
+                                          "(log-uniform)", "m_s2", [0.2, 2.0], gt=0),
+            "split_fractions": Key("numbers", "train, validation and test fractions of the label field "
+                                   "split (0, 1, 2), assigned per item and class: windows of one item "
+                                   "never straddle two parts", "", [0.7, 0.15, 0.15]),
         },
         fill_defaults=False,
         notes=(
@@ -435,6 +463,31 @@ SCHEMA: dict[str, Section] = {
             "healthy_fraction + outer_fraction + inner_fraction + ball_fraction = 1",
             "duration_s x dynamics.sample_rate_Hz gives at least 2 samples",
         ),
+    ),
+    "background": Section(
+        "The machine's own vibration (bearingsim.background), added to every data set item with "
+        "dataset.background = \"machine\"; written by ``bearingsim calibrate`` from a healthy record "
+        "(shaft and supply-frequency lines, the broadband part's RMS, spectral shape and shaft-rate "
+        "modulation, random knocks).",
+        {
+            "noise_rms_m_s2": _num("RMS of the broadband part", "m_s2", 0.0, ge=0),
+            "psd_frequencies_Hz": Key("numbers", "frequencies of the broadband part's spectral shape",
+                                      "Hz", OPTIONAL),
+            "psd_levels_dB": Key("numbers", "its power spectral density at psd_frequencies_Hz (dB, any "
+                                 "reference: the shape counts, noise_rms_m_s2 sets the level)", "", OPTIONAL),
+            "shaft_amplitudes_m_s2": Key("numbers", "amplitudes of the lines at 1, 2, ... x the shaft "
+                                         "frequency", "m_s2", OPTIONAL),
+            "line_frequency_Hz": _num("supply frequency", "Hz", 60.0, gt=0),
+            "line_amplitudes_m_s2": Key("numbers", "amplitudes of the lines at 1, 2, ... x the supply "
+                                        "frequency", "m_s2", OPTIONAL),
+            "modulation_depths": Key("numbers", "amplitude modulation of the broadband part at 1, 2, ... "
+                                     "x the shaft frequency (0-1)", "", OPTIONAL),
+            "knock_rate_Hz": _num("mean rate of random knocks", "Hz", 0.0, ge=0),
+            "knock_amplitude_m_s2": _num("peak of a knock", "m_s2", 0.0, ge=0),
+            "knock_frequency_Hz": _num("the resonance a knock rings", "Hz", 3000.0, gt=0),
+            "knock_damping_ratio": _num("its damping ratio", "", 0.05, gt=0, lt=1),
+        },
+        fill_defaults=False,
     ),
 }
 

@@ -142,7 +142,8 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
                    profile="rectangular", params: DynamicsParameters | None = None, duration=0.1,
                    sample_rate=48000.0, theta0=0.0, *, location="outer", slots=None,
                    realism: Realism | None = None, seeds=None, control="outer", hertz_method="exact",
-                   scheme="newmark", substeps=None, ball_iterations=None, unbridged=None) -> DynamicsBatchResult:
+                   scheme="newmark", substeps=None, ball_iterations=None, unbridged=None,
+                   strike=None) -> DynamicsBatchResult:
     """N simulations in lockstep (vmap over items of the fixed-step loop): same bearing (Z),
     defect profile, duration and sample rate.
 
@@ -152,8 +153,10 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     compiled program carries (:func:`defect_slots`; pass all a data set uses so that every
     chunk shares one program); ``params`` fields may be scalars or (N,) ((N, M) for the modes);
     ``seeds`` (N,) the items' realism seeds (default 0..N-1).  ``unbridged`` (N,): each item's
-    pit's unbridged fraction (:func:`bearingsim.realism.pit_unbridged_fraction`, needed when
-    ``realism`` has the pass-to-pass variability on; :func:`bearingsim.dynamics.vary_sensor`).  Never raises for an item:
+    pit's unbridged fraction (:func:`bearingsim.pit.pit_unbridged_fraction`, needed when
+    ``realism`` has the pass-to-pass variability on; :func:`bearingsim.dynamics.vary_sensor`).
+    ``strike`` (N,) or None: each item's probability that its pit strikes on a pass (ball pits
+    whose spin axis wanders; :func:`bearingsim.passes.strike_mask`).  Never raises for an item:
     ``result`` is per item.  ``ball_iterations``/``substeps`` None: :func:`batch_settings` on
     the extreme items of each location (:func:`extreme_items`), the largest count."""
     check_scheme(scheme)
@@ -163,7 +166,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     if realism.pass_variation and unbridged is None:
         raise InputError("simulate_batch: the pass-to-pass variability is on (Realism."
                          "pass_amplitude_cv_max_percent / pass_delay_sd_max_percent) but no unbridged "
-                         "fraction was given; pass unbridged=(N,) (bearingsim.realism.pit_unbridged_fraction)")
+                         "fraction was given; pass unbridged=(N,) (bearingsim.pit.pit_unbridged_fraction)")
     bc = lambda v: jnp.broadcast_to(jnp.asarray(v, jnp.float64), (n,))
     params = DynamicsParameters() if params is None else params
     f, z, g = params.modes()
@@ -216,11 +219,13 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     code = np.where((code == 0) & ~finite, int(RESULTS.nonfinite), code)
     sens = np.where(code[:, None] == 0, sens, 0.0)        # a failed item is flagged, never used
     labels = [motion_labels(m, realism) for m in motions]
-    if realism.pass_variation:
+    intermittent = strike is not None and bool(np.any(np.asarray(strike) < 1.0))
+    if realism.pass_variation or intermittent:
         active = [tuple(sp for sp in items[i] if sp.location == loc[i]) for i in range(n)]
         passes = [defect_pass_times(m, active[i], ts[-1], k_spin[i]) for i, m in enumerate(motions)]
-        u = np.where(code == 0, np.broadcast_to(np.asarray(unbridged, float), (n,)), 0.0)
-        sens = vary_sensor(ah[..., 0], sens, fs, passes, realism, u, seeds, params.modes(), labels)
+        u = np.where(code == 0, np.broadcast_to(np.asarray(0.0 if unbridged is None else unbridged, float), (n,)), 0.0)
+        p = None if strike is None else np.where(code == 0, np.broadcast_to(np.asarray(strike, float), (n,)), 1.0)
+        sens = vary_sensor(ah[..., 0], sens, fs, passes, realism, u, seeds, params.modes(), labels, p)
     for i, m in enumerate(motions):
         if realism.noise_rms > 0.0:
             sens[i] += sensor_mod.measurement_noise(seed_streams(int(seeds[i]))[3], T, realism.noise_rms, fs,

@@ -21,7 +21,8 @@ from ..errors import InputError
 from ..hertz import stiffness_curve
 from ..jones import solve
 from ..kinematics import Operation, defect_frequencies
-from ..realism import pass_variation, pit_unbridged_fraction
+from ..passes import pass_variation
+from ..pit import pit_unbridged_fraction
 from ..xla import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
@@ -85,7 +86,7 @@ def load_zone_centre(loads) -> float:
 
 def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     """(unbridged fraction, ok) of the one defect in ``defects``, taken as a round pit of its
-    arc length under the healthy contact (:func:`bearingsim.realism.pit_unbridged_fraction`):
+    arc length under the healthy contact (:func:`bearingsim.pit.pit_unbridged_fraction`):
     the outer contact of the ball at an outer pit, the inner contact of the ball at the load
     zone's centre for an inner pit, both for a ball pit.  The healthy state is the defective
     solve's own program with depth 0 (no compilation).  ``ok`` False: it did not converge."""
@@ -104,31 +105,35 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     return pit_unbridged_fraction(host, bearing, j, sp.location, float(sp.length(bearing))), True
 
 
-def vary_sensor(a_h, sens, fs, pass_times, realism, unbridged, seeds, modes, labels=None):
+def vary_sensor(a_h, sens, fs, pass_times, realism, unbridged, seeds, modes, labels=None, strike=None):
     """Sensor signals (N, T) with the pass-to-pass variability of a pit's impacts: each item's
     housing acceleration ``a_h`` (N, T) (x) varied pass by pass
-    (:func:`bearingsim.realism.pass_variation`: c.v. and delay s.d. the realism's maxima times
+    (:func:`bearingsim.passes.pass_variation`: c.v. and delay s.d. the realism's maxima times
     the item's unbridged fraction, drawn from its seed; ``pass_times`` N arrays) and put through
     the sensor modes ``(f, zeta, g)`` ((M,) or (N, M); :func:`bearingsim.sensor.apply_sensor_batch`,
     the input linear between samples, one program per N).  Rows with ``unbridged`` 0 keep
     ``sens``.  The variability is a per-pass effective depth and exit time acting on the sensor
     path only: displacements and housing acceleration stay the ODE's.  ``labels`` (N dicts)
     get each item's ``unbridged_fraction``, ``pass_amplitude_cv_percent``,
-    ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``."""
+    ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``.  ``strike`` (N,) or None:
+    each item's probability that its pit strikes on a pass (:func:`bearingsim.passes.strike_mask`;
+    rows with a probability < 1 are varied whatever their unbridged fraction)."""
     u = np.asarray(unbridged, float)
+    p = np.ones(u.shape) if strike is None else np.broadcast_to(np.asarray(strike, float), u.shape)
     a = np.array(a_h, dtype=float)
     out = np.array(sens, dtype=float)
     for i in range(a.shape[0]):
         cv = 0.01 * realism.pass_amplitude_cv_max_percent * u[i]
         jit = 0.01 * realism.pass_delay_sd_max_percent * u[i]
-        a[i], fac, shifts = pass_variation(a[i], fs, pass_times[i], cv, jit, int(seeds[i]))
+        a[i], fac, shifts = pass_variation(a[i], fs, pass_times[i], cv, jit, int(seeds[i]), float(p[i]))
         if labels is not None:
             labels[i].update(unbridged_fraction=float(u[i]), pass_amplitude_cv_percent=100.0 * cv,
                              pass_delay_sd_percent=100.0 * jit, pass_factors=fac, pass_shifts=shifts)
-    if np.any(u > 0.0):
+    varied = (u > 0.0) | (p < 1.0)
+    if np.any(varied):
         f, z, g = (np.asarray(v) for v in modes)
         y = np.asarray(sensor_mod.apply_sensor_batch(a, 1.0 / fs, f, z, g))
-        out = np.where((u > 0.0)[:, None], y, out)
+        out = np.where(varied[:, None], y, out)
     return out
 
 

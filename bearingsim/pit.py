@@ -1,0 +1,180 @@
+"""The physics of a round EDM pit under a ball contact (docs/realism.md): the fraction of the
+Hertz load a pit narrower than the contact ellipse takes away, the effective depth the Jones
+model needs for that loss, and the pit's unbridged fraction under the contact (what the
+pass-to-pass variability scales with).
+
+The CWRU faults are round EDM pits (diameter w = 0.007-0.040 in, depth 0.011 in) at the
+bottom of the groove.  The outer contact ellipse of a loaded 6205 ball is 2a ~ 1-2 mm across the
+track and 2b ~ 0.15-0.3 mm along it, so a pit is much narrower than the contact: the ball does
+not drop into it as into a full-width groove (the rectangular profile's drop, the ball's sag
+over the chord, ~ w^2 / (4 D)).  It keeps rolling on the raceway beside the pit and only loses
+the Hertz pressure over the pit's area.  :func:`pit_effective_depth` turns that lost fraction
+phi of the ball load (at the ball's approach) into the depth the Jones model needs for the same
+load loss, ``H = delta_o (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5), capped by the sag and the
+machined depth.  Core: NumPy and the Jones solve; no files.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
+           "pit_depth", "pit_effective_depth", "pit_depth_of_solution", "unbridged_fraction",
+           "pit_unbridged_fraction", "pass_cv"]
+
+# ------------------------------------------------------------------------------ pit physics
+def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
+    """Fraction of a Hertz contact's load carried over a round pit.
+
+    ``a`` semi-axis across the track, ``b`` along it, ``pit_diameter`` and ``offset`` (the
+    distance across the track from the contact centre to the pit centre) in the same unit.  The
+    Hertz pressure ``p0 sqrt(1 - x^2/a^2 - y^2/b^2)`` is integrated over the disc analytically in
+    y and numerically in x (``n`` points, Simpson), divided by the load ``(2/3) pi a b p0``.
+    Limits: 1 for a pit that covers the contact, ``3 r^2 / (2 a b)`` for a centred pit of radius
+    r << b.
+    """
+    from scipy.integrate import simpson
+
+    a, b, r, e = float(a), float(b), 0.5 * float(pit_diameter), abs(float(offset))
+    if not (a > 0 and b > 0 and r >= 0):
+        raise ValueError(f"need a, b > 0 and pit_diameter >= 0, got {a}, {b}, {pit_diameter}")
+    lo, hi = max(e - r, -a), min(e + r, a)
+    if r == 0.0 or lo >= hi:
+        return 0.0
+    x = np.linspace(lo, hi, n | 1)
+    c = b * np.sqrt(np.clip(1.0 - (x / a) ** 2, 0.0, None))                 # ellipse half-chord
+    y0 = np.minimum(np.sqrt(np.clip(r * r - (x - e) ** 2, 0.0, None)), c)    # disc within it
+    ratio = np.divide(y0, c, out=np.zeros_like(c), where=c > 0)
+    inner = y0 * np.sqrt(np.clip(c * c - y0 * y0, 0.0, None)) + c * c * np.arcsin(np.clip(ratio, 0, 1))
+    return float(min(1.0, simpson(inner / b, x=x) / (2.0 / 3.0 * np.pi * a * b)))
+
+
+class Contact(NamedTuple):
+    """One contact of the ball at a given azimuth in the healthy quasi-static state (SI)."""
+
+    delta: float            # approach delta (m)
+    a: float                # semi-axis across the track (m)
+    b: float                # semi-axis along the track (m)
+    Q: float                # load (N)
+    alpha: float            # contact angle (rad)
+    offset: float           # contact centre to the groove bottom across the track, f D sin(alpha) (m)
+
+
+#: where a pit sits: the outer or inner groove bottom, or a point of a ball's surface
+PIT_LOCATIONS = ("outer", "inner", "ball")
+
+
+def contact_of(sol, bearing, j, race="outer", centred=False) -> Contact:
+    """:class:`Contact` of ball ``j`` of the (single, host) quasi-static solution ``sol`` at its
+    ``race`` ("outer" or "inner") contact; ``offset`` is the contact centre's distance from the
+    groove bottom, ``f D |sin alpha|`` (0 with ``centred``: a pit on the ball, which meets the
+    contact on the ball's rolling circle)."""
+    if race not in ("outer", "inner"):
+        raise ValueError(f"race must be 'outer' or 'inner', got {race!r}")
+    get = lambda name: float(np.asarray(getattr(sol, f"{name}_{race}"))[j])  # noqa: E731
+    alpha = get("alpha")
+    f = float(bearing.f_outer if race == "outer" else bearing.f_inner)
+    offset = 0.0 if centred else f * float(bearing.ball_diameter) * abs(np.sin(alpha))
+    return Contact(get("delta"), get("a"), get("b"), get("Q"), alpha, offset)
+
+
+def contact_at(bearing, op, loads, center=0.0, hertz_method="exact", race="outer") -> Contact:
+    """The ``race`` contact of the ball placed at azimuth ``center`` in the healthy bearing."""
+    from .jones import solve
+
+    sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
+    psi = np.asarray(sol.azimuth)
+    j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
+    return contact_of(sol, bearing, j, race)
+
+
+class PitDepth(NamedTuple):
+    """Result of :func:`pit_effective_depth` (SI)."""
+
+    depth: float            # effective depth H for the Jones model (m)
+    load_fraction: float    # phi: ball load lost over the pit at the ball's approach
+    sag: float              # the ball's sag over the pit chord, D/2 - sqrt(D^2/4 - w^2/4) (m)
+    contact: Contact        # the ball's healthy contact at the pit
+
+
+def pit_depth(contact: Contact, pit_diameter, machined_depth, ball_diameter) -> PitDepth:
+    """Effective depth of a round pit of ``pit_diameter`` (m) under the healthy ``contact``:
+    the pit removes the fraction phi of the contact's load (:func:`pit_load_fraction`, the pit
+    ``contact.offset`` away from the contact centre across the track) at its approach, which the
+    Jones model reproduces with the depth ``delta (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5),
+    capped by the ball's sag over the pit chord and by the machined depth."""
+    D, w = float(ball_diameter), float(pit_diameter)
+    sag = 0.5 * D - np.sqrt(max(0.0, 0.25 * D * D - 0.25 * w * w))
+    phi = min(1.0, pit_load_fraction(contact.a, contact.b, w, contact.offset)) if contact.a > 0 else 0.0
+    h = max(contact.delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
+    return PitDepth(float(min(h, sag, float(machined_depth))), phi, float(sag), contact)
+
+
+def pit_effective_depth(bearing, op, loads, pit_diameter, machined_depth, center=0.0,
+                        hertz_method="exact", location="outer") -> PitDepth:
+    """Effective depth of a round EDM pit of ``pit_diameter`` (m), ``machined_depth`` deep, for
+    the Jones model.
+
+    ``location`` "outer" (default): the pit at the outer groove bottom at azimuth ``center``;
+    the healthy quasi-static state with a ball there gives that ball's outer approach and contact
+    ellipse (:func:`contact_at`), the contact centre ``f_o D sin(alpha_o)`` away from the groove
+    bottom.  "inner": the pit at the inner groove bottom, met by the ball at azimuth ``center``
+    (pass the load-zone centre: the pit turns with the shaft and its strongest impacts are
+    there); its inner contact, offset ``f_i D sin(alpha_i)``.  "ball": a pit on the ball's
+    rolling circle (no offset), met by the outer and the inner contact in turn: the mean of the
+    two effective depths (the engine carries one depth per pit; :class:`PitDepth` reports the
+    outer contact and the mean lost fraction).  The depth follows from :func:`pit_depth`.
+    Neglected: the pressure redistribution around the pit (the remaining contact is not
+    Hertzian) and the contact's entry/exit over the pit edges (the rectangular profile switches
+    at the pit edges).
+    """
+    from .jones import solve
+
+    if location not in PIT_LOCATIONS:
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
+    psi = np.asarray(sol.azimuth)
+    j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
+    return pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_depth)
+
+
+def pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_depth) -> PitDepth:
+    """:func:`pit_effective_depth` for ball ``j`` of a healthy (single, host) quasi-static
+    solution ``sol`` that is already at hand (the data sets solve their items in batches)."""
+    D = float(bearing.ball_diameter)
+    if location in ("outer", "inner"):
+        return pit_depth(contact_of(sol, bearing, j, location), pit_diameter, machined_depth, D)
+    if location != "ball":
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    po = pit_depth(contact_of(sol, bearing, j, "outer", centred=True), pit_diameter, machined_depth, D)
+    pi = pit_depth(contact_of(sol, bearing, j, "inner", centred=True), pit_diameter, machined_depth, D)
+    return PitDepth(0.5 * (po.depth + pi.depth), 0.5 * (po.load_fraction + pi.load_fraction), po.sag,
+                    po.contact)
+
+
+# ------------------------------------------------------------------------------ variability
+def unbridged_fraction(pit_diameter, contact_semi_axis_b) -> float:
+    """``max(0, 1 - 2 b / w)``: the fraction of the pit length ``w`` that the contact (length 2b)
+    cannot bridge, i.e. over which its central strip runs free."""
+    w, b = float(pit_diameter), float(contact_semi_axis_b)
+    return max(0.0, 1.0 - 2.0 * b / w) if w > 0.0 else 0.0
+
+
+def pit_unbridged_fraction(sol, bearing, j, location, pit_length) -> float:
+    """:func:`unbridged_fraction` of a pit ``pit_length`` (m) long under ball ``j``'s contact in
+    the healthy (single, host) quasi-static state ``sol``: its outer contact for an outer-race
+    pit, its inner contact for an inner-race pit, the mean of the two for a pit on the ball
+    (which meets both raceways in turn)."""
+    if location in ("outer", "inner"):
+        return unbridged_fraction(pit_length, contact_of(sol, bearing, j, location).b)
+    if location != "ball":
+        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+    return 0.5 * sum(unbridged_fraction(pit_length, contact_of(sol, bearing, j, r, centred=True).b)
+                     for r in ("outer", "inner"))
+
+
+def pass_cv(pit_diameter, contact_semi_axis_b, cv_max) -> float:
+    """Coefficient of variation of the per-pass impact factor, ``cv_max`` times
+    :func:`unbridged_fraction`."""
+    return float(cv_max) * unbridged_fraction(pit_diameter, contact_semi_axis_b)
