@@ -91,6 +91,7 @@ LABEL_FIELDS: dict[str, tuple[str, str]] = {
     "noise_rms_m_s2": ("<f8", "m/s^2"),
     "split": ("<i1", "-"),
     "signal_gain": ("<f8", "-"),
+    "snr_dB": ("<f8", "dB"),
     "strike_probability": ("<f8", "-"),
     "background_noise_rms_m_s2": ("<f8", "m/s^2"),
     "background_shaft_rms_m_s2": ("<f8", "m/s^2"),
@@ -227,6 +228,9 @@ def _draw_randomisation(ds, lab):
     if pos:
         lab["spall_center_deg"][outer] = np.asarray(pos, float)[choice[outer]]
     lab["signal_gain"] = _logu(rng, *ds.get("signal_gain", (1.0, 1.0)), n)
+    snr = ds.get("fault_snr_dB")
+    if snr is not None:     # the target ratio; the chunk sets the gain that meets it (label snr_dB)
+        lab["snr_dB"] = np.where(lab["fault_class"] > 0, rng.uniform(snr[0], snr[1], n), 0.0)
     lo, hi = ds.get("ball_strike_probability", (1.0, 1.0))
     p = rng.uniform(lo, hi, n) if lo != hi else np.full(n, float(lo))
     lab["strike_probability"] = np.where(lab["fault_class"] == 3, p, 1.0)
@@ -272,7 +276,7 @@ def item_background(case, ds, fs):
         sec = case.si("background") if "background" in case.data else {}
         fixed = bgm.Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
                                tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
-                               tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels_dB") or ()),
+                               tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels") or ()),
                                tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
                                float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
                                float(sec.get("knock_damping_ratio", 0.05)))
@@ -475,11 +479,12 @@ def _chunk_file(folder: Path, k: int) -> Path:
 _BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
                       "background_knock_rate_Hz")
 _CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
-                 "pass_amplitude_cv_percent") + _BACKGROUND_FIELDS
+                 "pass_amplitude_cv_percent", "signal_gain", "snr_dB") + _BACKGROUND_FIELDS
 
 
 def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile, params, realism,
-                    duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged, modes=None, background=None):
+                    duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged, modes=None, background=None,
+                    fault_snr=False):
     import equinox as eqx
 
     m = idx.size
@@ -494,13 +499,22 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
         control=case.data["operation"]["raceway_control"], hertz_method=case.hertz_method,
         ball_iterations=it, substeps=sub, unbridged=unbridged[pad],
         strike=strike if np.any(strike < 1.0) else None)
-    a = np.asarray(res.sensor_acceleration)[:m] * lab["signal_gain"][idx][:, None]
+    a = np.asarray(res.sensor_acceleration)[:m]
+    gain = lab["signal_gain"][idx].copy()
+    snr = np.zeros(m)
     bg_labels = {k: np.zeros(m) for k in _BACKGROUND_FIELDS}
-    if background is not None:
+    if background is None:
+        a = a * gain[:, None]
+    else:
         T = a.shape[1]
+        rms = lambda v: float(np.sqrt(np.mean(v * v)))  # noqa: E731
         for j, i in enumerate(idx):
             x, lb = background(seeds[i], lab["speed_rpm"][i] / 60.0, T)
-            a[j] += x
+            s = rms(a[j] - a[j].mean())
+            if fault_snr and lab["fault_class"][i] > 0 and s > 0.0:
+                gain[j] = 10.0 ** (lab["snr_dB"][i] / 20.0) * rms(x) / s
+            snr[j] = 20.0 * np.log10(gain[j] * s / rms(x)) if s > 0.0 and rms(x) > 0.0 else 0.0
+            a[j] = gain[j] * a[j] + x
             for k in _BACKGROUND_FIELDS:
                 bg_labels[k][j] = lb[k]
     code = np.asarray(res.result)[:m].astype(np.int32)
@@ -515,7 +529,7 @@ def _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, prof
             for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz")}
     return dict(index=idx, signals=np.where(ok[:, None], a, 0.0).astype(np.float32), result=code,
                 pass_jitter_percent=jitter, pass_delay_sd_percent=delay, pass_amplitude_cv_percent=cv,
-                **bg_labels,
+                **bg_labels, signal_gain=gain, snr_dB=snr,
                 **{k: np.where(np.isfinite(v) & ok, v, 0.0) for k, v in freq.items()})
 
 
@@ -650,7 +664,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
                 idx = order[k * chunk:(k + 1) * chunk]
                 out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
                                       params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok,
-                                      unbridged, modes, background)
+                                      unbridged, modes, background, "fault_snr_dB" in ds)
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
                 done += idx.size
                 bar.update(idx.size)

@@ -434,6 +434,10 @@ SCHEMA: dict[str, Section] = {
                                      "[dynamics] values)", "", OPTIONAL, gt=0),
             "signal_gain": _range("factor on each item's bearing signal (the level of the transfer "
                                   "path, unknown on a new machine), drawn log-uniform", "", [1.0, 1.0], gt=0),
+            "fault_snr_dB": _range("signal-to-background ratio of every fault item: its bearing signal is "
+                                   "scaled so that its RMS stands this far over its background's RMS (drawn "
+                                   "uniform in dB; replaces signal_gain for fault items; needs a background)",
+                                   "dB", OPTIONAL, ge=-60, le=80),
             "ball_strike_probability": _range("probability that a ball pit strikes the raceways on a "
                                               "pass (its spin axis wanders), drawn uniform per item; "
                                               "1: every pass", "", [1.0, 1.0], ge=0, le=1),
@@ -474,7 +478,7 @@ SCHEMA: dict[str, Section] = {
             "psd_frequencies_Hz": Key("numbers", "frequencies of the broadband part's spectral shape",
                                       "Hz", OPTIONAL),
             "psd_levels_dB": Key("numbers", "its power spectral density at psd_frequencies_Hz (dB, any "
-                                 "reference: the shape counts, noise_rms_m_s2 sets the level)", "", OPTIONAL),
+                                 "reference: the shape counts, noise_rms_m_s2 sets the level)", "dB", OPTIONAL),
             "shaft_amplitudes_m_s2": Key("numbers", "amplitudes of the lines at 1, 2, ... x the shaft "
                                          "frequency", "m_s2", OPTIONAL),
             "line_frequency_Hz": _num("supply frequency", "Hz", 60.0, gt=0),

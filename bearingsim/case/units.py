@@ -31,6 +31,7 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "N_per_m": (1.0, "N/m", "N/m"),
     "Ns_per_m": (1.0, "N s/m", "N s/m"),
     "m_s2": (1.0, "m/s^2", "m/s^2"),
+    "dB": (1.0, "dB", "dB"),                     # a level ratio, kept in dB
     # output units of reports, results files and plots
     "um": (1e-6, "um", "m"),
     "mrad": (1e-3, "mrad", "rad"),

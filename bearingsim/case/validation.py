@@ -348,6 +348,23 @@ def _dataset_checks(data: dict, problems: list[str], geometry_ok: bool, raw: dic
                 key in ds and "ball_diameter_mm" in b and not ds[key][1] < b["ball_diameter_mm"]:
             problems.append(f"dataset.{key} = {fmt_value(ds[key])}: the largest depth must be less than "
                             f"bearing.ball_diameter_mm = {fmt_num(b['ball_diameter_mm'])}")
+    if "fault_snr_dB" in ds and ds.get("background", "none") == "none":
+        problems.append(f"dataset.fault_snr_dB = {fmt_value(ds['fault_snr_dB'])} needs a background to stand "
+                        "over: set dataset.background = \"random\" or \"machine\", or remove fault_snr_dB")
+    noise = data.get("dynamics", {}).get("noise_rms_m_s2", 0.0)
+    if ds.get("background", "none") != "none" and isinstance(noise, (int, float)) and noise > 0.0:
+        problems.append(f"dataset.background = \"{ds['background']}\" with dynamics.noise_rms_m_s2 = "
+                        f"{fmt_num(noise)}: the background carries the broadband noise (and fault_snr_dB "
+                        "scales the bearing's signal against it): set dynamics.noise_rms_m_s2 = 0")
+    pos = ds.get("outer_center_positions_deg")
+    if pos is not None and not all(isinstance(v, (int, float)) and -360.0 <= v <= 360.0 for v in pos):
+        problems.append(f"dataset.outer_center_positions_deg = {fmt_value(pos)}: every position must be a "
+                        "number within [-360, 360] deg")
+    fr3 = ds.get("split_fractions")
+    if fr3 is not None and (len(fr3) != 3 or not all(isinstance(v, (int, float)) and v >= 0 for v in fr3)
+                            or sum(fr3) <= 0):
+        problems.append(f"dataset.split_fractions = {fmt_value(fr3)}: give three fractions >= 0 (train, "
+                        "validation, test) with a positive sum")
     if "radial_N" in ds and "axial_N" in ds and ds["radial_N"][0] <= 0.0 and ds["axial_N"][0] <= 0.0:
         problems.append(f"dataset.radial_N = {fmt_value(ds['radial_N'])} and dataset.axial_N = "
                         f"{fmt_value(ds['axial_N'])} both allow 0: an unloaded bearing has no solution; "
