@@ -20,6 +20,8 @@ in m/s^2, frequencies in Hz) and a NumPy generator:
     frequencies, interpolated linearly in dB over log-frequency and held flat outside them;
     empty: white
 ``modulation_depths``  (K,) amplitude modulation of the broadband part at k f_r (0-1)
+``line_modulation_depths``  (L,) its modulation at l x the supply frequency (an induction
+    motor's magnetic forces pulse at twice the supply frequency)
 ``knock_rate``, ``knock_amplitude``, ``knock_frequency``, ``knock_damping``  Poisson knocks
     (per second; peak amplitude; the ringing resonance and its damping ratio)
 
@@ -49,6 +51,7 @@ class Background(NamedTuple):
     knock_amplitude: float = 0.0
     knock_frequency: float = 3000.0
     knock_damping: float = 0.05
+    line_modulation_depths: tuple = ()
 
     def as_labels(self) -> dict:
         """Scalar summaries for a data set's labels."""
@@ -107,8 +110,12 @@ def background_signal(rng: np.random.Generator, n, fs, shaft_hz, bg: Background)
     noise = shaped_noise(rng, n, fs, bg.noise_rms, bg.psd_frequencies, bg.psd_levels_db)
     md = np.asarray(bg.modulation_depths, float)
     ph = rng.uniform(0, 2 * np.pi, md.size)
-    if md.size:
+    lm = np.asarray(bg.line_modulation_depths, float)
+    phl = rng.uniform(0, 2 * np.pi, lm.size) if lm.size else ()
+    if md.size or lm.size:
         env = 1.0 + sum(m * np.cos(2 * np.pi * k * shaft_hz * t + p) for k, (m, p) in enumerate(zip(md, ph), start=1))
+        env = env + sum(m * np.cos(2 * np.pi * k * bg.line_frequency * t + p)
+                        for k, (m, p) in enumerate(zip(lm, phl), start=1))
         noise = noise * np.maximum(env, 0.0)
     x += noise
     if bg.knock_rate > 0.0 and bg.knock_amplitude > 0.0:
@@ -138,6 +145,7 @@ BACKGROUND_DEFAULTS = {
     "modulation_harmonics": 8,                 # shaft-synchronous modulation at k f_r, k = 1..8
     "modulation_depth": (0.0, 0.4),            # a harmonic's depth where it is strong ...
     "modulation_strong": 0.4,                  # ... with this probability; else up to 0.03
+    "line_modulation_harmonics": 2,            # at the supply frequency and twice it
     "knock_rate_Hz": (0.0, 20.0),
     "knock_relative": (0.5, 8.0),              # knock peak / noise RMS
     "knock_Hz": (1000.0, 5500.0),
@@ -171,8 +179,11 @@ def random_background(rng: np.random.Generator, fs, ranges=None) -> Background:
     K = int(r["modulation_harmonics"])
     strong = rng.random(K) < float(r["modulation_strong"])
     md = np.where(strong, rng.uniform(*r["modulation_depth"], K), rng.uniform(0.0, 0.03, K))
+    L = int(r["line_modulation_harmonics"])
+    strong_l = rng.random(L) < float(r["modulation_strong"])
+    lmd = np.where(strong_l, rng.uniform(*r["modulation_depth"], L), rng.uniform(0.0, 0.03, L))
     kr = float(rng.uniform(*r["knock_rate_Hz"]))
     return Background(tuple(sa), lf, tuple(la), rms, tuple(grid), tuple(10.0 * np.log10(power)), tuple(md),
                       kr, rms * float(_logu(rng, *r["knock_relative"])),
                       float(_logu(rng, r["knock_Hz"][0], min(r["knock_Hz"][1], top))),
-                      float(rng.uniform(*r["knock_damping"])))
+                      float(rng.uniform(*r["knock_damping"])), tuple(lmd))

@@ -122,3 +122,16 @@ def test_strike_mask_and_intermittent_passes():
     _, fa, sa = pass_variation(x, fs, tp, 0.2, 0.01, 4, 1.0)
     _, fb, sb = pass_variation(x, fs, tp, 0.2, 0.01, 4, 0.5)
     assert np.all(sa == sb) and np.all((fb[1:] == 0.0) | (fb[1:] == fa[1:]))
+
+
+def test_supply_frequency_modulation_shows_in_the_envelope():
+    """Broadband noise modulated at twice the supply frequency (an induction motor): its squared
+    envelope has the line at 120 Hz (2 x 60 Hz) and none at 60 Hz, as the modulation's spectrum."""
+    from bearingsim.signal import envelope_spectrum
+    bg = Background(noise_rms=1.0, line_frequency=60.0, line_modulation_depths=(0.0, 0.5))
+    x = background_signal(np.random.default_rng(3), 48000, FS, 29.95, bg)
+    sp = envelope_spectrum(x, FS, band=(1000.0, 5000.0))
+    f, A = np.asarray(sp.freqs), np.asarray(sp.amplitude)
+    near = lambda f0: A[np.abs(f - f0) < 1.0].max()
+    floor = np.median(A[(f > 30) & (f < 600)])
+    assert near(120.0) > 30 * floor and near(60.0) < 5 * floor
