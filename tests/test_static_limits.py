@@ -99,3 +99,14 @@ def test_static_refuses_no_load_at_speed(tmp_path, capsys):
     p.write_text(ACBB.replace("axial_N = 17800", "axial_N = 0"))
     assert main(["static", str(p)]) == 3
     assert "no load on the inner ring at speed" in capsys.readouterr().err
+
+
+def test_static_refuses_the_random_search_state_with_an_85_deg_contact(tmp_path, capsys):
+    """One of the converged states with loaded contacts beyond 75 deg (issue 21: 149 of 3696 random
+    cases): the 218 at 12 krpm, 3 kN thrust and 152 N m.  The solver reaches it (alpha_i to 85 deg,
+    flagged by limits), `static` refuses it as over the shoulder."""
+    p = tmp_path / "c.toml"
+    p.write_text(ACBB.replace("speed_rpm = 10000", "speed_rpm = 12000")
+                 .replace("axial_N = 17800", "axial_N = 3000\nmoment_y_Nm = 152"))
+    assert main(["static", str(p)]) == 3
+    assert "beyond the edge of its groove" in capsys.readouterr().err
