@@ -14,7 +14,7 @@ EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "r
         "calibration", "transfer"}
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
-        "pit", "passes", "features", "background"}
+        "pit", "passes", "features", "background", "life", "limits"}
 INFRASTRUCTURE = {"__init__", "_version"}
 
 

@@ -21,6 +21,7 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "deg": (math.pi / 180.0, "deg", "rad"),
     "rpm": (2.0 * math.pi / 60.0, "rpm", "rad/s"),
     "N": (1.0, "N", "N"),
+    "kN": (1e3, "kN", "N"),
     "Nm": (1.0, "N m", "N m"),
     "GPa": (1e9, "GPa", "Pa"),
     "kg_m3": (1.0, "kg/m^3", "kg/m^3"),
@@ -41,6 +42,8 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "per_mm": (1e3, "1/mm", "1/m"),
     "N_per_mm1_5": (1e3 ** 1.5, "N/mm^1.5", "N/m^1.5"),
     "rev_s": (2.0 * math.pi, "Hz", "rad/s"),       # a rotation frequency (shaft, cage) in Hz
+    "h": (3600.0, "h", "s"),
+    "Mrev": (1e6, "10^6 rev", "rev"),
 }
 
 
