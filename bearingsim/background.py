@@ -135,7 +135,9 @@ BACKGROUND_DEFAULTS = {
     "psd_bump_db": (0.0, 25.0),
     "psd_bump_octaves": (0.1, 0.7),
     "psd_tilt_db_per_octave": (-6.0, 3.0),
-    "modulation_depth": (0.0, 0.3),            # at f_r and 2 f_r
+    "modulation_harmonics": 8,                 # shaft-synchronous modulation at k f_r, k = 1..8
+    "modulation_depth": (0.0, 0.4),            # a harmonic's depth where it is strong ...
+    "modulation_strong": 0.4,                  # ... with this probability; else up to 0.03
     "knock_rate_Hz": (0.0, 20.0),
     "knock_relative": (0.5, 8.0),              # knock peak / noise RMS
     "knock_Hz": (1000.0, 5500.0),
@@ -166,7 +168,9 @@ def random_background(rng: np.random.Generator, fs, ranges=None) -> Background:
         h = 10.0 ** (rng.uniform(*r["psd_bump_db"]) / 10.0)
         w = rng.uniform(*r["psd_bump_octaves"])
         power = power + h * np.exp(-0.5 * (np.log2(grid / fc) / w) ** 2) * 10.0 ** (level / 10.0)
-    md = rng.uniform(*r["modulation_depth"], 2)
+    K = int(r["modulation_harmonics"])
+    strong = rng.random(K) < float(r["modulation_strong"])
+    md = np.where(strong, rng.uniform(*r["modulation_depth"], K), rng.uniform(0.0, 0.03, K))
     kr = float(rng.uniform(*r["knock_rate_Hz"]))
     return Background(tuple(sa), lf, tuple(la), rms, tuple(grid), tuple(10.0 * np.log10(power)), tuple(md),
                       kr, rms * float(_logu(rng, *r["knock_relative"])),

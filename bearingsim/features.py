@@ -13,12 +13,16 @@ Envelope lines (one set per band, then the largest over the bands)
     (at least two bins) over the median of the spectrum between 1 and 20 x the shaft
     frequency.  Lines: 1, 2, 3 x BPFO (outer race); 1, 2, 3 x BPFI and BPFI +- f_r (inner race:
     the load zone modulates it at the shaft rate); 1, 2 x (2 BSF) and 2 BSF +- FTF (a ball pit
-    meets the raceways twice per ball turn and orbits with the cage); f_r, 2 f_r (unbalance,
-    misalignment: machine background, not a bearing fault); FTF.  Each feature is the largest
-    over the bands (the fault's own resonance band is unknown on a new machine), as is the band
-    kurtosis.
+    meets the raceways twice per ball turn and orbits with the cage) and the cage comb, the mean
+    of the lines at k FTF, k = 1..8 (the pitted ball passes through the load zone once per cage
+    turn: where its strikes are irregular, the 2 BSF line smears but the cage periodicity of
+    their strength survives; an outer-race fault has lines only at multiples of 9 FTF = BPFO for
+    Z = 9); f_r, 2 f_r and the strongest of 3..8 f_r (unbalance, misalignment, the machine's
+    shaft-synchronous modulation: background, not a bearing fault); FTF.  Each feature is the
+    largest over the bands (the fault's own resonance band is unknown on a new machine), as is
+    the band kurtosis.
 Family summaries
-    The mean of each fault family's lines (outer, inner, ball) and the contrast of each family
+    The mean of each fault family's lines (outer; inner; ball with the cage comb) and the contrast of each family
     against the strongest of the other two (a fault shows one family above the others).
 Impulsiveness of the raw window
     Kurtosis, crest factor and |skewness|.
@@ -56,7 +60,7 @@ def fault_orders(bearing, alpha=None) -> FaultOrders:
     return FaultOrders(float(f.bpfo), float(f.bpfi), float(f.two_bsf), float(f.ftf))
 
 
-_LINES = ("O1", "O2", "O3", "I1", "I2", "I3", "Isb", "B1", "B2", "Bsb", "R1", "R2", "C")
+_LINES = ("O1", "O2", "O3", "I1", "I2", "I3", "Isb", "B1", "B2", "Bsb", "Ccomb", "R1", "R2", "Rcomb", "C")
 #: feature names, in the column order of :func:`window_features`
 FEATURE_NAMES = _LINES + ("band_kurtosis", "outer", "inner", "ball", "outer_contrast",
                           "inner_contrast", "ball_contrast", "kurtosis", "crest", "abs_skewness")
@@ -143,13 +147,15 @@ def window_features(windows, fs, shaft_hz, orders: FaultOrders) -> np.ndarray:
                           _line_db(f, S, (orders.bpfi + 1.0) * fr, floor, df))
         v["Bsb"] = 0.5 * (_line_db(f, S, (orders.two_bsf - orders.ftf) * fr, floor, df) +
                           _line_db(f, S, (orders.two_bsf + orders.ftf) * fr, floor, df))
+        v["Ccomb"] = np.mean([_line_db(f, S, k * orders.ftf * fr, floor, df) for k in range(1, 9)], axis=0)
+        v["Rcomb"] = np.max([_line_db(f, S, k * fr, floor, df) for k in range(3, 9)], axis=0)
         v["band_kurtosis"] = _kurt(y)
         per_band.append(np.stack([v[k] for k in _LINES + ("band_kurtosis",)], axis=1))
     F = np.max(np.stack(per_band, axis=0), axis=0)          # (N, 14): largest over the bands
     col = {k: F[:, i] for i, k in enumerate(_LINES + ("band_kurtosis",))}
     fam = {"outer": (col["O1"] + col["O2"] + col["O3"]) / 3.0,
            "inner": (col["I1"] + col["I2"] + col["I3"] + col["Isb"]) / 4.0,
-           "ball": (col["B1"] + col["B2"] + col["Bsb"]) / 3.0}
+           "ball": (col["B1"] + col["B2"] + col["Bsb"] + col["Ccomb"]) / 4.0}
     names = ("outer", "inner", "ball")
     contrast = [fam[a] - np.maximum(*(fam[b] for b in names if b != a)) for a in names]
     m2 = rms * rms

@@ -15,7 +15,7 @@ import numpy as np
 from .case.units import from_si
 from .signal import EnvelopeSpectrum, Spectrum, defect_markers
 
-__all__ = ["plot_envelope_spectrum", "plot_time_history"]
+__all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer"]
 
 # colours per marker family; anything else cycles through _OTHER
 _FAMILY_COLOURS = {"BPFO": "#d62728", "BPFI": "#9467bd", "BSF": "#8c564b", "2BSF": "#8c564b",
@@ -167,3 +167,44 @@ def plot_time_history(t, x, marks=None, title: str = "", path=None, ax=None, zoo
     if title:
         ax.set_title(title)
     return _finish(fig, path)
+
+
+def plot_transfer(reports, path=None):
+    """The transfer benchmark (:func:`bearingsim.transfer.transfer_benchmark`): per classifier its
+    confusion matrix on the real windows (rows the true class, as fractions of the row) and the
+    accuracy of every real record."""
+    n = len(reports)
+    fig, axes = plt.subplots(2, n, figsize=(5.2 * n, 8.4), squeeze=False,
+                             gridspec_kw={"height_ratios": [1.0, 0.8]})
+    for k, r in enumerate(reports):
+        ax = axes[0, k]
+        cm = np.asarray(r.confusion, float)
+        frac = cm / np.maximum(cm.sum(1, keepdims=True), 1.0)
+        ax.imshow(frac, vmin=0.0, vmax=1.0, cmap="Blues")
+        names = ("healthy", "outer", "inner", "ball")
+        ax.set_xticks(range(4), names)
+        ax.set_yticks(range(4), names)
+        ax.set_xlabel("predicted class")
+        ax.set_ylabel("true class (real records)")
+        for i in range(4):
+            for j in range(4):
+                if cm[i].sum() > 0:
+                    ax.text(j, i, f"{frac[i, j]:.2f}\n({int(cm[i, j])})", ha="center", va="center",
+                            color="white" if frac[i, j] > 0.6 else "black", fontsize=8)
+        wc, wv = r.worst_class
+        ax.set_title(f"{r.classifier.replace('_', ' ')}\nbalanced accuracy {r.balanced_accuracy:.2f}, "
+                     f"worst class {wc} {wv:.2f}", fontsize=10)
+        ax = axes[1, k]
+        recs = list(r.per_record)
+        acc = [r.per_record[q][1] for q in recs]
+        ax.barh(range(len(recs)), acc, color=["#2ca02c" if a >= 0.7 else "#d62728" for a in acc])
+        ax.set_yticks(range(len(recs)), [q.replace("cwru_", "").replace("_0hp", "") for q in recs], fontsize=8)
+        ax.set_xlim(0.0, 1.0)
+        ax.axvline(0.7, color="0.5", lw=0.8, ls="--")
+        ax.set_xlabel("accuracy over the record's windows (-)")
+        ax.invert_yaxis()
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=_DPI)
+        plt.close(fig)
+    return fig

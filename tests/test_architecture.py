@@ -125,3 +125,23 @@ def test_no_module_imports_private_names(name):
     assert paths
     bad = private_imports(paths, dotted)
     assert not bad, "\n".join(bad)
+
+
+def module_graph():
+    """Top-level module -> the set of top-level bearingsim modules it imports (any depth)."""
+    graph = {}
+    for p in sources():
+        own = stage(p)
+        if own in INFRASTRUCTURE:
+            continue
+        for _, target, _ in imports(p, dotted(p)):
+            parts = target.split(".")
+            if len(parts) > 1 and parts[1] != own and parts[1] not in INFRASTRUCTURE:
+                graph.setdefault(own, set()).add(parts[1])
+    return graph
+
+
+def test_no_two_modules_import_each_other():
+    g = module_graph()
+    pairs = sorted({tuple(sorted((a, b))) for a, deps in g.items() for b in deps if a in g.get(b, set())})
+    assert not pairs, "modules that import each other: " + ", ".join(f"{a} <-> {b}" for a, b in pairs)

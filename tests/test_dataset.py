@@ -364,3 +364,65 @@ def test_dataset_items_carry_the_pass_to_pass_variability_of_a_single_run(tmp_pa
     r0 = dyn.simulate(*args, realism=on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0),
                       **kw)
     assert np.abs(X[i] - r0.sensor_acceleration).max() > 0.1 * peak
+
+
+# ------------------------------------------------------------------ domain randomisation (issue 20)
+RANDOMISED = """
+signal_gain = [2.0, 2.0]
+background = "random"
+background_rms_m_s2 = [0.5, 0.5]
+resonance_frequency_Hz = [2000, 4000]
+resonance_damping_ratio = [0.02, 0.05]
+resonance_gain = [0.5, 2.0]
+outer_center_positions_deg = [0, 90, 180]
+split_fractions = [0.5, 0.25, 0.25]
+"""
+
+
+def test_randomised_labels_are_drawn_apart_from_the_old_ones():
+    from bearingsim.dataset import transfer_paths
+    base, rnd = draw_labels(spec()), draw_labels(spec(extra=RANDOMISED))
+    same = [k for k in LABEL_FIELDS if k not in ("spall_center_deg", "signal_gain", "split")]
+    for k in same:                       # the draws every spec made before stay what they were
+        assert np.array_equal(base[k], rnd[k]), k
+    outer = rnd["fault_class"] == 1
+    assert set(rnd["spall_center_deg"][outer]) <= {0.0, 90.0, 180.0}
+    assert np.all(rnd["signal_gain"] == 2.0) and np.all(base["signal_gain"] == 1.0)
+    assert np.all(rnd["strike_probability"] == 1.0)
+    for c in range(2):                    # every class split per item: train first, by fractions
+        parts = np.bincount(rnd["split"][rnd["fault_class"] == c], minlength=3)
+        n = parts.sum()
+        assert parts[0] == int(np.round(0.5 * n))
+    tp = transfer_paths(spec(extra=RANDOMISED), rnd)
+    assert tp.shape == (6, 1, 3)
+    assert np.all((tp[..., 0] >= 2000) & (tp[..., 0] <= 4000))
+    assert np.all((tp[..., 1] >= 0.02) & (tp[..., 1] <= 0.05)) and np.all((tp[..., 2] >= 0.5) & (tp[..., 2] <= 2.0))
+    fixed = transfer_paths(spec(), base)  # no ranges: the [dynamics] modes for every item
+    assert np.all(fixed == fixed[:1])
+
+
+def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
+    from bearingsim.background import background_signal, random_background
+    from bearingsim.dataset import item_seeds
+    case, a, *_ = files
+    # gain 2, background off: exactly twice the signals of the gain-1 data set (float32 rounding)
+    s2 = make_dataset(spec(extra="signal_gain = [2.0, 2.0]\n"), tmp_path / "g2.h5", progress=False)
+    assert s2.failed == 0
+    with h5py.File(a, "r") as f1, h5py.File(tmp_path / "g2.h5", "r") as f2:
+        x1, x2 = f1["signals"][()].astype(float), f2["signals"][()].astype(float)
+        assert np.allclose(x2, 2.0 * x1, rtol=2e-7, atol=1e-7 * np.abs(x1).max())
+    # background: the difference to the gain-2 data set is each item's drawn background
+    s3 = make_dataset(spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\n'
+                          'background_rms_m_s2 = [0.5, 0.5]\n'), tmp_path / "bg.h5", progress=False)
+    assert s3.failed == 0
+    with h5py.File(tmp_path / "bg.h5", "r") as f3:
+        x3 = f3["signals"][()].astype(float)
+        lab = f3["labels"][()]
+        fs = float(f3.attrs["sample_rate_Hz"])
+    seeds = item_seeds(7, 6)
+    for i in range(6):
+        r = np.random.default_rng(np.random.SeedSequence([int(seeds[i]), 11]))
+        bg = random_background(r, fs, {"noise_rms_m_s2": (0.5, 0.5)})
+        want = background_signal(r, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, bg)
+        assert np.allclose(x3[i] - x2[i], want, atol=3e-6 * max(1.0, np.abs(x3[i]).max()))
+        assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
