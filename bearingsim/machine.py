@@ -34,7 +34,7 @@ modulation
     to 0.45 fs): a modulation (1 + m cos 2 pi k f_r t) of noise puts a line 2 m times the
     envelope's mean at k f_r.  The line is the magnitude of the envelope's projection on
     exp(-2 pi i k f_r t), its noise bias removed in power with the mean of six off-line
-    projections ((k +- 0.23, 0.31, 0.37) f_r); m_k for k = 1, 2, clipped to [0, 0.9].
+    projections ((k +- 0.23, 0.31, 0.37) f_r); m_k for k = 1..8, clipped to [0, 0.9].
 resonances
     Peaks of the Welch PSD of the residual (~10 Hz bins, smoothed by a 100 Hz moving average)
     between 1 kHz and 0.45 fs with a prominence of at least 3 dB; the strongest (by prominence,
@@ -75,8 +75,8 @@ from .errors import InputError
 
 __all__ = ["MachineCalibration", "calibrate_machine", "read_record", "check_record", "shaft_speed",
            "fit_lines", "fit_knocks", "broadband_shape", "modulation_depths", "psd_resonances",
-           "write_spec", "calibrated_transfer", "UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "GAIN_ITEMS",
-           "GAIN_SPREAD", "SPEED_SPREAD", "SHAFT_HARMONICS", "LINE_HARMONICS", "PSD_POINTS"]
+           "write_spec", "calibrated_transfer", "CalibratedTransfer", "UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "GAIN_ITEMS",
+           "GAIN_SPREAD", "SPEED_SPREAD", "SHAFT_HARMONICS", "LINE_HARMONICS", "MODULATION_HARMONICS", "PSD_POINTS"]
 
 #: record units: factor to m/s^2
 UNITS = {"g": 9.80665, "m/s^2": 1.0}
@@ -86,6 +86,8 @@ MIN_SECONDS = 1.0
 MIN_SAMPLE_RATE_HZ = 2400.0
 SHAFT_HARMONICS = 6
 LINE_HARMONICS = 4
+#: shaft-rate modulation of the broadband part fitted at k f_r, k = 1..MODULATION_HARMONICS
+MODULATION_HARMONICS = 8
 PSD_POINTS = 48
 #: items simulated to fit the signal gain to a fault record
 GAIN_ITEMS = 6
@@ -484,7 +486,7 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
     noise_rms = _record_rms(rb)
     pf, pl = broadband_shape(rb, fs)
     lo = min(max(500.0, 8.0 * fr, 5.0 * F), 0.3 * fs)
-    md = modulation_depths(r, fs, fr, lo, keep=keep)
+    md = modulation_depths(r, fs, fr, lo, orders=tuple(range(1, MODULATION_HARMONICS + 1)), keep=keep)
     noise_rms /= math.sqrt(1.0 + 0.5 * float(np.sum(md * md)))   # the RMS before the modulation
     kf, kz = (res[int(np.argmax([p[2] for p in res]))][:2] if res else (min(3000.0, 0.3 * fs), 0.05))
     bg = Background(tuple(shaft_amp), F, tuple(line_amp), noise_rms, tuple(pf), tuple(pl), tuple(md),
@@ -592,29 +594,57 @@ def write_spec(cal: MachineCalibration, path) -> Path:
 
 
 # ------------------------------------------------------------------------------ transfer check
-def calibrated_transfer(data_dir, out_dir, *, count=400, duration_s=0.2, template="dataset_cwru_4class",
+@dataclass
+class CalibratedTransfer:
+    """Result of :func:`calibrated_transfer`."""
+
+    calibration: MachineCalibration
+    reports: list                      # bearingsim.transfer.TransferReport per classifier
+    used: tuple                        # the records the calibration used (file stems)
+    tested: tuple                      # the records the benchmark tested on
+    count: int
+    seconds: float                     # the data set's simulation (compilation included)
+
+    def text(self) -> str:
+        from .report import calibration_text
+        from .transfer import transfer_text
+
+        return "\n".join([f"calibrated on {', '.join(self.used)} only; tested on the other records: "
+                          f"{', '.join(self.tested)}",
+                          calibration_text(self.calibration),
+                          f"{self.count} items of {self.calibration.case.data['dataset']['duration_s']:g} s "
+                          f"at {self.calibration.sample_rate_Hz:g} Hz simulated in {self.seconds:.0f} s",
+                          transfer_text(self.reports)])
+
+
+def calibrated_transfer(template, data_dir, count=400, *, duration_s=0.2, out_dir=None,
                         healthy="cwru_normal_0hp_12k_decimated", fault=None, fault_class=None, seed=0,
-                        channel="DE", progress=False):
-    """The issue's check: calibrate on the healthy record (and at most one fault record) of
-    ``data_dir``, simulate ``count`` items of ``duration_s``, run the transfer benchmark on the
-    real records the calibration did not use.  Returns (MachineCalibration, reports, records
-    tested, data set seconds)."""
+                        channel="DE", records=None, progress=False) -> CalibratedTransfer:
+    """The issue's check, end to end: calibrate ``template`` (a Case or a name / path) on the
+    ``healthy`` record of ``data_dir`` (and at most one ``fault`` record of ``fault_class``),
+    simulate ``count`` items of ``duration_s`` at the record's rate, run the transfer benchmark
+    (:func:`bearingsim.transfer.transfer_benchmark`, 0.2 s windows) on the real records
+    (``records``, default :data:`bearingsim.transfer.REAL_RECORDS`) that the calibration did not
+    use.  ``out_dir``: where the spec and the data set go (default: a temporary folder, removed)."""
     from .dataset import make_dataset
     from .features import fault_orders
     from .transfer import REAL_RECORDS, transfer_benchmark
 
-    data_dir, out_dir = Path(data_dir), Path(out_dir)
+    data_dir = Path(data_dir)
+    tpl = load_case(template) if isinstance(template, (str, Path)) else template
     x, fs, unit, rpm, _ = read_record(data_dir / f"{healthy}.npz", channel)
     kw = {}
     if fault is not None:
-        y, ffs, _, frpm, _ = read_record(data_dir / f"{fault}.npz", channel, unit=unit)
+        y, ffs, _, _, _ = read_record(data_dir / f"{fault}.npz", channel, unit=unit)
         kw = dict(fault=y, fault_class=fault_class, fault_sample_rate=ffs)
-    cal = calibrate_machine(x, fs, template, unit=unit, nominal_rpm=rpm, count=count, duration_s=duration_s,
-                            seed=seed, source=f"{healthy}.npz", fault_source=f"{fault}.npz", **kw)
-    spec = write_spec(cal, out_dir / "calibrated_spec.toml")
-    h5 = out_dir / "calibrated.h5"
-    s = make_dataset(load_case(spec), h5, progress=progress)
-    used = {healthy} | ({fault} if fault else set())
-    records = {k: v for k, v in REAL_RECORDS.items() if k not in used}
-    reports = transfer_benchmark(h5, data_dir, fault_orders(cal.case.bearing()), 0.2, records)
-    return cal, reports, records, s.seconds
+    used = (healthy,) + ((fault,) if fault else ())
+    tested = {k: v for k, v in (REAL_RECORDS if records is None else records).items() if k not in used}
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(out_dir) if out_dir is not None else Path(tmp)
+        cal = calibrate_machine(x, fs, tpl, unit=unit, nominal_rpm=rpm, count=count, duration_s=duration_s,
+                                seed=seed, source=f"{healthy}.npz", fault_source=f"{fault}.npz", **kw)
+        spec = write_spec(cal, out / "calibrated_spec.toml")
+        h5 = out / "calibrated.h5"
+        s = make_dataset(load_case(spec), h5, progress=progress)
+        reports = transfer_benchmark(h5, data_dir, fault_orders(cal.case.bearing()), 0.2, tested)
+    return CalibratedTransfer(cal, reports, used, tuple(tested), int(count), s.seconds)
