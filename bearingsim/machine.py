@@ -40,9 +40,11 @@ resonances
     between 1 kHz and 0.45 fs with a prominence of at least 3 dB; the strongest (by prominence,
     at most as many as the template has sensor modes).  Damping from the half-power width:
     zeta = width / (2 f_n) at half the peak's prominence above its base (linear PSD), the
-    smoothing's width removed in quadrature, clipped to [0.005, 0.3].  The data set draws every
-    sensor mode's frequency in [0.85 min, 1.15 max] of the peaks (at most 0.45 fs) and its
-    damping in [0.67, 1.5] x the mean fitted ratio; the [dynamics] modes become the peaks.
+    smoothing's width removed in quadrature, clipped to [0.005, 0.3]; a peak no wider than the
+    smoothing is a tone and skipped.  The data set draws every sensor mode's frequency in
+    [0.85 min, 1.15 max] of the peaks (at most 0.45 fs) and its damping in [0.67, 1.5] x the mean
+    fitted ratio; the [dynamics] modes become the peaks (with the template's strongest gains
+    when there are fewer peaks than its modes).
 levels
     With a fault record of a known class: a few items of that class (:data:`GAIN_ITEMS`) are
     simulated with the spec at the record's speed (no background, signal gain 1, the transfer
@@ -524,13 +526,13 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
         z_range = (round(max(DAMPING_SPREAD[0] * zm, 1e-3), 5), round(min(DAMPING_SPREAD[1] * zm, 0.9), 5))
         ds["resonance_frequency_Hz"] = list(fr_range)
         ds["resonance_damping_ratio"] = list(z_range)
+        # the [dynamics] modes: the peaks (in frequency order); fewer peaks than the template's
+        # modes keep the template's strongest gains
         g = dyn.get("resonance_gains")
-        modes = sorted(fk) + [fk[-1]] * (M - len(fk))
-        dyn["resonance_frequencies_Hz"] = [round(v, 1) for v in modes]
-        dyn["resonance_damping_ratios"] = [round(v, 5) for v in (sorted(zk, key=lambda z: fk[zk.index(z)])
-                                                                 + [zk[-1]] * (M - len(zk)))]
-        if g is not None and len(g) not in (1, M):
-            dyn["resonance_gains"] = [float(np.mean(g))]
+        dyn["resonance_frequencies_Hz"] = [round(v, 1) for v in fk]
+        dyn["resonance_damping_ratios"] = [round(v, 5) for v in zk]
+        if g is not None and len(g) > 1 and len(g) != len(fk):
+            dyn["resonance_gains"] = sorted(float(v) for v in g)[-len(fk):]
         dyn.pop("resonance_frequency_Hz", None)
         dyn.pop("resonance_damping_ratio", None)
     raw["background"] = _background_table(bg)
