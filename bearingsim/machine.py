@@ -1,5 +1,7 @@
 """Calibrate a data set to your own machine (``bearingsim calibrate``; docs/realism.md,
-"Calibrate to your own machine").
+"Calibrate to your own machine").  Records are read and checked by :mod:`bearingsim.records`;
+the background fits are :mod:`bearingsim.background_fit` (NumPy, core); this module builds the
+spec, fits the signal gain with simulated items, and runs the end-to-end transfer check.
 
 An ML user with another rig has a healthy record (and perhaps one record of a known fault) and
 the bearing's geometry.  :func:`calibrate_machine` fits what such records determine and writes a
@@ -68,29 +70,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.signal as ss
 
 from .background import Background
+from .background_fit import (MODULATION_HARMONICS, broadband_shape, fit_knocks, fit_lines, modulation_depths,
+                             psd_resonances, shaft_speed, supply_lines)
 from .case import case_from_dict, check_sampling, load_case, to_toml
-from .case.units import to_si
 from .errors import InputError
+from .records import UNITS, check_record, read_record
 
-__all__ = ["MachineCalibration", "calibrate_machine", "read_record", "check_record", "shaft_speed",
-           "fit_lines", "fit_knocks", "broadband_shape", "modulation_depths", "psd_resonances",
-           "write_spec", "calibrated_transfer", "CalibratedTransfer", "UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "GAIN_ITEMS",
-           "GAIN_SPREAD", "SPEED_SPREAD", "SHAFT_HARMONICS", "LINE_HARMONICS", "MODULATION_HARMONICS", "PSD_POINTS"]
+__all__ = ["MachineCalibration", "calibrate_machine", "write_spec", "calibrated_transfer", "CalibratedTransfer",
+           "GAIN_ITEMS", "GAIN_SPREAD", "SPEED_SPREAD", "RESONANCE_SPREAD", "DAMPING_SPREAD"]
 
-#: record units: factor to m/s^2
-UNITS = {"g": 9.80665, "m/s^2": 1.0}
-#: shortest record (s): 1 Hz resolution of the lines, 30 revolutions of an 1800 rpm shaft
-MIN_SECONDS = 1.0
-#: lowest sample rate: the resonance search and the features start at 1 kHz and end at 0.45 fs
-MIN_SAMPLE_RATE_HZ = 2400.0
-SHAFT_HARMONICS = 6
-LINE_HARMONICS = 4
-#: shaft-rate modulation of the broadband part fitted at k f_r, k = 1..MODULATION_HARMONICS
-MODULATION_HARMONICS = 8
-PSD_POINTS = 48
 #: items simulated to fit the signal gain to a fault record
 GAIN_ITEMS = 6
 #: the signal_gain range is [gain / GAIN_SPREAD, gain x GAIN_SPREAD]
@@ -100,294 +90,7 @@ SPEED_SPREAD = 0.025
 #: resonance frequency range: [lo, hi] x the fitted peaks; damping range x the fitted ratio
 RESONANCE_SPREAD = (0.85, 1.15)
 DAMPING_SPREAD = (0.67, 1.5)
-_KNOCK_SIGMA = 7.0
 _FAULT_CLASSES = ("outer", "inner", "ball")
-
-
-# ------------------------------------------------------------------------------ inputs
-def check_record(x, fs, what="record", case=None, max_rpm=None) -> np.ndarray:
-    """The record as a 1-D float64 array, or InputError saying what is wrong (every problem)."""
-    problems = []
-    try:
-        fs_ok = fs is not None and math.isfinite(float(fs)) and float(fs) > 0
-    except (TypeError, ValueError):
-        fs_ok = False
-    if not fs_ok:
-        problems.append(f"{what}: sample rate {fs!r} Hz: give a finite sample rate > 0 "
-                        "(--sample-rate-Hz, or the key fs of an .npz file)")
-    elif float(fs) < MIN_SAMPLE_RATE_HZ:
-        problems.append(f"{what}: sample rate {float(fs):g} Hz is too low: calibration needs at least "
-                        f"{MIN_SAMPLE_RATE_HZ:g} Hz (resonances and envelope bands from 1 kHz up to 0.45 fs)")
-    a = np.asarray(x)
-    if a.dtype.kind not in "biuf":
-        problems.append(f"{what}: samples of type {a.dtype} are not numbers")
-        raise InputError("\n".join(problems))
-    if a.ndim == 2 and 1 in a.shape:
-        a = a.ravel()
-    if a.ndim != 1:
-        problems.append(f"{what}: shape {a.shape}: need one channel (a 1-D array or one column)")
-    elif a.size == 0:
-        problems.append(f"{what}: empty (no samples)")
-    else:
-        bad = int(np.sum(~np.isfinite(a)))
-        if bad:
-            problems.append(f"{what}: {bad} of {a.size} samples are NaN or infinite")
-        if fs_ok and a.size / float(fs) < MIN_SECONDS:
-            problems.append(f"{what}: {a.size} samples = {a.size / float(fs):.3g} s at {float(fs):g} Hz is "
-                            f"too short: calibration needs at least {MIN_SECONDS:g} s")
-        if not bad and a.size > 1 and np.ptp(a) == 0:
-            problems.append(f"{what}: all samples are equal (no signal)")
-    if fs_ok and case is not None and max_rpm is not None and float(fs) >= MIN_SAMPLE_RATE_HZ:
-        from .case import characteristic_frequencies
-        top = max(characteristic_frequencies(case, max_rpm).values())
-        if float(fs) < 2.0 * top:
-            problems.append(f"{what}: sample rate {float(fs):g} Hz is below twice the bearing's highest "
-                            f"defect frequency ({top:.1f} Hz at {max_rpm:g} rpm)")
-    if problems:
-        raise InputError("\n".join(problems))
-    return a.astype(np.float64)
-
-
-def read_record(path, channel=None, sample_rate=None, unit=None):
-    """(samples, sample rate Hz, unit, nominal rpm or None, channel) of a record file: .npz (keys
-    like the CWRU files: a channel such as DE, fs, rpm, units), .npy, or .csv / .txt (one column;
-    commas, semicolons or white space).  ``sample_rate`` / ``unit`` given override nothing: they
-    must agree with the file's own when it has one."""
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"{p}: no such record file")
-    if p.is_dir():
-        raise InputError(f"{p}: is a directory, not a record file")
-    suffix = p.suffix.lower()
-    fs_file, unit_file, rpm = None, None, None
-    try:
-        if suffix == ".npz":
-            with np.load(p, allow_pickle=False) as z:
-                keys = list(z.files)
-                arrays = [k for k in keys if z[k].ndim >= 1 and z[k].size > 16 and z[k].dtype.kind in "biuf"]
-                if channel is None:
-                    if "DE" in arrays:          # the CWRU convention: the drive-end channel
-                        channel = "DE"
-                    elif len(arrays) != 1:
-                        raise InputError(f"{p}: name the channel (--channel): the file holds "
-                                         f"{', '.join(arrays) or 'no signal arrays'}")
-                    else:
-                        channel = arrays[0]
-                if channel not in keys:
-                    raise InputError(f"{p}: no channel {channel!r}: the file holds "
-                                     f"{', '.join(arrays) or 'no signal arrays'}")
-                x = np.asarray(z[channel])
-                if "fs" in keys:
-                    fs_file = float(z["fs"])
-                if "rpm" in keys:
-                    rpm = float(z["rpm"])
-                if "units" in keys:
-                    u = str(z["units"]).strip().lower()
-                    unit_file = "g" if u.startswith("g") else "m/s^2" if u.startswith("m/s") else None
-        elif suffix == ".npy":
-            x = np.load(p, allow_pickle=False)
-        elif suffix in (".csv", ".txt"):
-            text = p.read_text(encoding="utf-8")
-            rows = [r for r in text.replace(";", ",").splitlines() if r.strip() and not r.lstrip().startswith("#")]
-            try:
-                x = np.array([[float(v) for v in r.replace(",", " ").split()] for r in rows])
-            except ValueError:
-                raise InputError(f"{p}: not a column of numbers (first row {rows[0][:40]!r})") from None
-        else:
-            raise InputError(f"{p}: unknown record format {suffix or '(no suffix)'}: use .npz, .npy, .csv or .txt")
-    except InputError:
-        raise
-    except (OSError, ValueError, UnicodeDecodeError) as e:
-        raise InputError(f"{p}: cannot read the record: {e}") from None
-    if channel is not None and suffix != ".npz":
-        raise InputError(f"{p}: --channel {channel} applies to .npz files only")
-    if sample_rate is not None and fs_file is not None and not math.isclose(float(sample_rate), fs_file, rel_tol=1e-9):
-        raise InputError(f"{p}: --sample-rate-Hz {sample_rate:g} disagrees with the file's fs = {fs_file:g} Hz")
-    if unit is not None and unit_file is not None and unit != unit_file:
-        raise InputError(f"{p}: --unit {unit} disagrees with the file's units ({unit_file})")
-    fs = fs_file if fs_file is not None else sample_rate
-    u = unit_file if unit_file is not None else unit
-    if fs is None:
-        raise InputError(f"{p}: no sample rate: give --sample-rate-Hz (Hz, > 0)")
-    if u is None:
-        raise InputError(f"{p}: the file does not say its unit: give --unit g or --unit m/s^2")
-    if u not in UNITS:
-        raise InputError(f"{p}: unit {u!r}: one of {', '.join(UNITS)}")
-    return x, fs, u, rpm, channel
-
-
-# ------------------------------------------------------------------------------ fits
-def _amplitude_spectrum(x, fs, pad=4):
-    n = x.size
-    w = np.hanning(n)
-    nfft = 1 << (int(np.ceil(np.log2(n))) + int(np.log2(pad)))
-    A = 2.0 * np.abs(np.fft.rfft((x - x.mean()) * w, nfft)) / w.sum()
-    return np.fft.rfftfreq(nfft, 1.0 / fs), A
-
-
-def _excess_db(f, A, span_hz):
-    """dB of A over its running median (window ``span_hz``)."""
-    from scipy.ndimage import median_filter
-
-    k = max(5, int(round(span_hz / (f[1] - f[0]))) | 1)
-    med = median_filter(A, size=k, mode="nearest")
-    return 20.0 * np.log10(np.maximum(A, 1e-300) / np.maximum(med, 1e-300))
-
-
-def shaft_speed(x, fs, nominal_hz, harmonics=SHAFT_HARMONICS, search=0.10) -> float:
-    """Shaft frequency (Hz) of a record: harmonic search within +-``search`` of ``nominal_hz``."""
-    fmax = min((harmonics + 1) * nominal_hz * (1 + search), 0.45 * fs)
-    f, A = _amplitude_spectrum(x, fs)
-    m = f <= fmax + 10.0
-    f, E = f[m], _excess_db(f[m], A[m], max(4.0, 0.3 * nominal_hz))
-    df = f[1] - f[0]
-    cand = np.arange(nominal_hz * (1 - search), nominal_hz * (1 + search), df / 16.0)
-    ks = np.arange(1, harmonics + 1)
-    tot = np.zeros(cand.size)
-    for k in ks:
-        tot += np.maximum(np.interp(k * cand, f, E), 0.0)
-    return float(cand[int(np.argmax(tot))])
-
-
-def _supply(x, fs, shaft_hz, T):
-    """(line frequency, kept harmonic numbers, dB excess) of the better of 50 / 60 Hz."""
-    f, A = _amplitude_spectrum(x, fs)
-    E = _excess_db(f, A, 8.0)
-    res = 1.0 / T
-    best = (60.0, [], -np.inf)
-    for F in (50.0, 60.0):
-        kept, ex = [], []
-        for l in range(1, LINE_HARMONICS + 1):
-            fl = l * F
-            if fl >= 0.45 * fs:
-                break
-            k = max(1, round(fl / shaft_hz))
-            if abs(fl - k * shaft_hz) < 3.0 * res:
-                continue
-            kept.append(l)
-            m = np.abs(f - fl) <= max(2.0 * res, 0.002 * fl)
-            ex.append(float(E[m].max()))
-        score = float(np.mean(ex)) if ex else -np.inf
-        if score > best[2]:
-            best = (F, kept, score)
-    return best
-
-
-def fit_lines(x, fs, shaft_hz, line_hz=None, line_harmonics=()):
-    """Least-squares amplitudes (m/s^2 if ``x`` is) of the shaft harmonics k = 1..6 and the given
-    supply harmonics; returns (shaft amplitudes, line amplitudes (one per harmonic 1..max,
-    0 where left out), the fitted lines as a record)."""
-    n = x.size
-    t = np.arange(n) / fs
-    freqs = [k * shaft_hz for k in range(1, SHAFT_HARMONICS + 1)]
-    nl = max(line_harmonics, default=0)
-    freqs += [l * line_hz for l in line_harmonics]
-    use = [i for i, fk in enumerate(freqs) if fk < 0.45 * fs]
-    cols = [np.ones(n)]
-    for i in use:
-        w = 2 * np.pi * freqs[i] * t
-        cols += [np.cos(w), np.sin(w)]
-    M = np.column_stack(cols)
-    c, *_ = np.linalg.lstsq(M, x, rcond=None)
-    amps = np.zeros(len(freqs))
-    for j, i in enumerate(use):
-        amps[i] = math.hypot(c[1 + 2 * j], c[2 + 2 * j])
-    lines = M[:, 1:] @ c[1:]
-    shaft = amps[:SHAFT_HARMONICS]
-    line = np.zeros(nl)
-    for l, a in zip(line_harmonics, amps[SHAFT_HARMONICS:]):
-        line[l - 1] = a
-    return shaft, line, lines
-
-
-def fit_knocks(r, fs, sigma=_KNOCK_SIGMA):
-    """(rate Hz, median peak amplitude, mask of the samples outside knock segments) of a residual."""
-    sos = ss.butter(4, [1000.0, 0.45 * fs], btype="bandpass", fs=fs, output="sos")
-    y = ss.sosfiltfilt(sos, r)
-    s = 1.4826 * np.median(np.abs(y - np.median(y)))
-    env = np.abs(ss.hilbert(y))
-    over = np.flatnonzero(env > sigma * s)
-    keep = np.ones(r.size, bool)
-    if over.size == 0 or s == 0:
-        return 0.0, 0.0, keep
-    gap = int(0.005 * fs)
-    starts = [over[0]] + [over[i + 1] for i in np.flatnonzero(np.diff(over) > gap)]
-    ends = [over[i] for i in np.flatnonzero(np.diff(over) > gap)] + [over[-1]]
-    peaks = []
-    for a, b in zip(starts, ends):
-        peaks.append(float(np.max(np.abs(y[a:b + 1]))))
-        keep[max(0, a - int(0.002 * fs)):a + int(0.020 * fs)] = False
-    return len(starts) / (r.size / fs), float(np.median(peaks)), keep
-
-
-def broadband_shape(r, fs, points=PSD_POINTS):
-    """(frequencies Hz, levels dB) of the residual's Welch PSD averaged over ``points``
-    log-spaced bands from 50 Hz to 0.45 fs."""
-    nper = 1 << int(round(np.log2(fs / 10.0)))
-    f, P = ss.welch(r, fs=fs, nperseg=min(nper, r.size))
-    edges = np.geomspace(50.0 / 2 ** (1 / 8), 0.45 * fs, points + 1)
-    centres = np.sqrt(edges[:-1] * edges[1:])
-    lev = []
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        m = (f >= lo) & (f < hi)
-        v = P[m].mean() if m.any() else np.interp(np.sqrt(lo * hi), f, P)
-        lev.append(10.0 * np.log10(max(v, 1e-300)))
-    return centres, np.asarray(lev)
-
-
-def modulation_depths(r, fs, shaft_hz, lo_hz, orders=(1, 2), keep=None):
-    """Shaft-rate modulation depths of a broadband residual (see the module docstring); ``keep``:
-    mask of the samples that count (outside knocks)."""
-    sos = ss.butter(4, [lo_hz, 0.45 * fs], btype="bandpass", fs=fs, output="sos")
-    e = np.abs(ss.hilbert(ss.sosfiltfilt(sos, r))) ** 2
-    t = np.arange(e.size) / fs
-    if keep is not None:
-        e, t = e[keep], t[keep]
-    mean = e.mean()
-    ec = e - mean
-
-    def proj(fq):
-        return 2.0 * abs(np.mean(ec * np.exp(-2j * np.pi * fq * t)))
-
-    out = []
-    for k in orders:
-        line = proj(k * shaft_hz)
-        off = [proj((k + s * d) * shaft_hz) for d in (0.23, 0.31, 0.37) for s in (-1, 1)]
-        a = math.sqrt(max(line ** 2 - float(np.mean(np.square(off))), 0.0))
-        out.append(min(a / (2.0 * mean), 0.9) if mean > 0 else 0.0)
-    return np.asarray(out)
-
-
-def psd_resonances(r, fs, count, lo_hz=1000.0, smooth_hz=100.0):
-    """[(frequency Hz, damping ratio, prominence dB)] of the strongest PSD peaks (at most
-    ``count``) between ``lo_hz`` and 0.45 fs (see the module docstring)."""
-    nper = 1 << int(round(np.log2(fs / 10.0)))
-    f, P = ss.welch(r, fs=fs, nperseg=min(nper, r.size))
-    from scipy.ndimage import median_filter
-
-    df = f[1] - f[0]
-    k = max(1, int(round(smooth_hz / df)))
-    Pm = median_filter(P, size=max(3, int(round(1.5 * smooth_hz / df)) | 1), mode="nearest")
-    Ps = np.convolve(Pm, np.ones(k) / k, mode="same")
-    m = (f >= lo_hz) & (f <= 0.45 * fs)
-    fb, Pb = f[m], Ps[m]
-    L = 10.0 * np.log10(np.maximum(Pb, 1e-300))
-    pk, prop = ss.find_peaks(L, prominence=3.0)
-    if pk.size == 0:
-        return []
-    order = np.argsort(prop["prominences"])[::-1]
-    widths = ss.peak_widths(Pb, pk[order], rel_height=0.5)[0] * df
-    out = []
-    for j, w in zip(order, widths):
-        fn = float(fb[pk[j]])
-        w_true = math.sqrt(max(w * w - (k * df) ** 2, 0.0))
-        if w_true < 2.0 * df:         # no wider than the smoothing: a tone, not a resonance
-            continue
-        zeta = float(np.clip(w_true / (2.0 * fn), 0.005, 0.3))
-        out.append((fn, zeta, float(prop["prominences"][j])))
-        if len(out) == count:
-            break
-    return sorted(out)
 
 
 # ------------------------------------------------------------------------------ calibration
@@ -477,7 +180,7 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
         fr, how = float(shaft_rpm) / 60.0, "given"
     else:
         fr, how = shaft_speed(x, fs, nominal / 60.0), "spectrum"
-    F, kept, excess_db = _supply(x, fs, fr, T)
+    F, kept, excess_db = supply_lines(x, fs, fr, T)
     detected = bool(kept) and excess_db >= 6.0
     shaft_amp, line_amp, lines = fit_lines(x, fs, fr, F, kept if detected else ())
     r = x - lines

@@ -304,7 +304,8 @@ def calibrate_case(healthy, output, *, template="dataset_cwru_4class", fault=Non
     shaft speed (else searched near the .npz rpm or the template's speed).  Returns the
     ``MachineCalibration``."""
     from .case import load_case
-    from .machine import calibrate_machine, read_record, write_spec
+    from .machine import calibrate_machine, write_spec
+    from .records import read_record
 
     tpl = load_case(template)
     x, fs, u, nominal, ch = read_record(healthy, channel, sample_rate, unit)

@@ -12,7 +12,8 @@ from bearingsim.background import Background, background_signal
 from bearingsim.case import case_from_dict, load_case, parse_case
 from bearingsim.cli import main
 from bearingsim.dataset import make_dataset
-from bearingsim.machine import calibrate_machine, read_record
+from bearingsim.machine import calibrate_machine
+from bearingsim.records import read_record
 from bearingsim.workflows import calibrate_case
 
 ROOT = Path(__file__).resolve().parent.parent
