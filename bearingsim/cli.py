@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|demo``.
 
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
@@ -165,6 +165,17 @@ def cmd_dataset(args):
     return 0
 
 
+def cmd_calibrate(args):
+    cal = workflows.calibrate_case(args.healthy, args.output, template=args.template, fault=args.fault,
+                                   fault_class=args.fault_class, channel=args.channel,
+                                   sample_rate=args.sample_rate_Hz, rpm=args.rpm, unit=args.unit,
+                                   count=args.count, duration_s=args.duration_s)
+    print(report.calibration_text(cal))
+    _wrote(args.output)
+    print(f"run it: bearingsim dataset {args.output} -o data.h5")
+    return 0
+
+
 def cmd_compare(args):
     case = load_case(args.case)
     cmp = workflows.compare_case(case, throw=False)
@@ -234,6 +245,22 @@ def build_parser():
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
+    s = _command(sub, "calibrate", cmd_calibrate, "fit a data set spec to your machine: background, "
+                 "resonances and levels from a healthy record (and at most one fault record)",
+                 positional=("healthy", "HEALTHY", "healthy record: .npz (channel, fs, rpm, units), .npy, "
+                             ".csv or .txt (one column)"))
+    s.add_argument("-o", "--output", required=True, metavar="SPEC.toml")
+    s.add_argument("--template", default="dataset_cwru_4class", metavar="CASE",
+                   help="data set spec with the bearing geometry and [dataset] (default dataset_cwru_4class)")
+    s.add_argument("--fault", metavar="RECORD", help="one record of a known fault (same sample rate)")
+    s.add_argument("--fault-class", choices=("outer", "inner", "ball"), help="the fault record's class")
+    s.add_argument("--channel", help="the .npz key of the signal (default DE, or the file's only array)")
+    s.add_argument("--sample-rate-Hz", type=float, metavar="FS", help="sample rate when the file does not say")
+    s.add_argument("--rpm", type=float, metavar="N", help="the healthy record's shaft speed (default: "
+                   "from the spectrum, near the .npz rpm or the template's speed)")
+    s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
+    s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
+    s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
     _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",

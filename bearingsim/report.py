@@ -217,3 +217,36 @@ def spectrum_text(analysis) -> str:
         f"relative difference {(a.peak - f0) / f0 * 100:+.4f} %",
         table(("k", f"k x {name} Hz", "measured Hz", "amplitude (m/s^2)^2", "diff %"), rows,
               ("{}", "{:.3f}", "{:.3f}", "{:.4g}", "{:+.4f}"))])
+
+
+def calibration_text(cal, output=None) -> str:
+    """What ``bearingsim calibrate`` fitted (bearingsim.machine.MachineCalibration)."""
+    bg = cal.background
+    mm = lambda v: ", ".join(f"{a:.4g}" for a in v) or "-"
+    lines = [f"{cal.case.title}",
+             f"record: {cal.duration_s:.2f} s at {cal.sample_rate_Hz:g} Hz; shaft {60 * cal.shaft_hz:.1f} rpm "
+             f"({cal.shaft_hz:.3f} Hz, {cal.shaft_source})",
+             f"shaft lines k = 1..{len(bg.shaft_amplitudes)}: {mm(bg.shaft_amplitudes)} m/s^2",
+             (f"supply {bg.line_frequency:g} Hz ({cal.line_excess_db:.1f} dB over the floor), lines: "
+              f"{mm(bg.line_amplitudes)} m/s^2") if cal.line_detected else
+             "supply lines: none told apart from the shaft's (kept in them)",
+             f"broadband: rms {bg.noise_rms:.4g} m/s^2, shape at {len(bg.psd_frequencies)} frequencies "
+             f"{bg.psd_frequencies[0]:.0f}-{bg.psd_frequencies[-1]:.0f} Hz, shaft-rate modulation "
+             f"{mm(bg.modulation_depths)}",
+             f"knocks: {bg.knock_rate:.3g} per s, peak {bg.knock_amplitude:.3g} m/s^2" if bg.knock_rate > 0
+             else "knocks: none",
+             "resonances: " + ("; ".join(f"{f:.0f} Hz, damping {z:.4f} ({p:.1f} dB)" for f, z, p in cal.resonances)
+                               or "none found (the template's transfer path kept)")]
+    if cal.resonance_range_Hz:
+        lines.append(f"dataset.resonance_frequency_Hz = [{cal.resonance_range_Hz[0]:g}, {cal.resonance_range_Hz[1]:g}], "
+                     f"resonance_damping_ratio = [{cal.damping_range[0]:g}, {cal.damping_range[1]:g}]")
+    if cal.signal_gain is not None:
+        f = cal.fault
+        lines.append(f"signal gain {cal.signal_gain:.4g} from the {f['class']} record (rms {f['rms_m_s2']:.4g}, "
+                     f"{f['excess_rms_m_s2']:.4g} m/s^2 above the healthy; {f['items']} simulated items "
+                     f"{f['simulated_rms_m_s2']:.4g} m/s^2 at gain 1): dataset.signal_gain = "
+                     f"[{cal.signal_gain_range[0]:g}, {cal.signal_gain_range[1]:g}]")
+    else:
+        lines.append(f"dataset.signal_gain = [{cal.signal_gain_range[0]:g}, {cal.signal_gain_range[1]:g}] "
+                     "(the template's: no fault record)")
+    return "\n".join(lines)

@@ -15,12 +15,14 @@ function                     result                                      command
 :func:`compare_case`         :class:`Comparison`                         ``bearingsim compare``
 :func:`dataset_case`         ``DatasetSummary`` (file written)           ``bearingsim dataset``
 :func:`spectrum_file`        :class:`EnvelopeAnalysis`                   ``bearingsim spectrum``
+:func:`calibrate_case`       ``MachineCalibration`` (spec written)       ``bearingsim calibrate``
 ============================ =========================================== ======================
 
 Errors are the classes of :mod:`bearingsim.errors`: bad input raises ``InputError``; with
 ``throw=True`` (the default) a failed solve raises ``NotConvergedError`` naming the case file,
 with ``throw=False`` the result is returned with its codes (per item for batches).  Nothing here
-prints, writes files (except :func:`dataset_case`, whose result is the file) or draws.
+prints, writes files (except :func:`dataset_case` and :func:`calibrate_case`, whose result is the
+file) or draws.
 """
 from __future__ import annotations
 
@@ -34,7 +36,7 @@ from .case.units import from_si
 from .errors import InputError, NotConvergedError
 
 __all__ = ["solve_case", "refuse_over_shoulder", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
-           "spectrum_file", "envelope_band", "simulation_spectrum", "Study", "Comparison",
+           "spectrum_file", "calibrate_case", "envelope_band", "simulation_spectrum", "Study", "Comparison",
            "EnvelopeAnalysis", "STUDY_CHUNK"]
 
 #: quasi-static states solved together by :func:`study_case` (the last chunk is padded)
@@ -358,6 +360,39 @@ def dataset_case(case, path, *, throw=True, progress=False):
         raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
                                 f"set failed (written to {path} with labels/result != 0)")
     return summary
+
+
+# ------------------------------------------------------------------------------- calibrate
+def calibrate_case(healthy, output, *, template="dataset_cwru_4class", fault=None, fault_class=None,
+                   channel=None, sample_rate=None, rpm=None, fault_rpm=None, unit=None, count=None,
+                   duration_s=None, seed=None):
+    """Calibrate a data set spec to the machine of a healthy record file (and at most one fault
+    record file of a known class) and write it to ``output`` (TOML, atomically): see
+    :mod:`bearingsim.machine`.  Record files: .npz (a channel, fs, rpm, units), .npy, .csv / .txt;
+    ``sample_rate`` / ``unit`` where the file does not say; ``rpm`` the healthy record's exact
+    shaft speed (else searched near the .npz rpm or the template's speed).  Returns the
+    ``MachineCalibration``."""
+    from .case import load_case
+    from .machine import calibrate_machine, write_spec
+    from .records import read_record
+
+    tpl = load_case(template)
+    x, fs, u, nominal, ch = read_record(healthy, channel, sample_rate, unit)
+    kw = {}
+    if fault is not None:
+        if fault_class is None:
+            raise InputError(f"{fault}: a fault record needs its class: --fault-class outer|inner|ball")
+        y, ffs, _, _, _ = read_record(fault, ch if str(fault).lower().endswith(".npz") else None,
+                                      sample_rate, u)
+        kw = dict(fault=y, fault_class=fault_class, fault_sample_rate=ffs, fault_rpm=fault_rpm)
+    elif fault_class is not None:
+        raise InputError(f"--fault-class {fault_class} without a fault record (--fault RECORD)")
+    cal = calibrate_machine(x, fs, tpl, unit=u, shaft_rpm=rpm, nominal_rpm=nominal, count=count,
+                            duration_s=duration_s, seed=seed, source=str(healthy),
+                            fault_source=str(fault), **kw)
+    cal.fault["channel"] = ch
+    write_spec(cal, output)
+    return cal
 
 
 # ------------------------------------------------------------------------------- spectra

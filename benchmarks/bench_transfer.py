@@ -108,7 +108,7 @@ def main():
             except ImportError:
                 print("(b) skipped: the calibration workflow (bearingsim.machine) is not available")
             else:
-                calibrated_transfer(spec, data_dir, args.count)
+                print("(b) " + calibrated_transfer(spec, data_dir, args.count).text())
     if args.speed_count > 0:
         with tempfile.TemporaryDirectory() as tmp:
             spec_path = Path(tmp) / "spec.toml"

@@ -189,3 +189,83 @@ def test_bad_input_exit_2_named_nothing_written(name, tmp_path, capsys):
     for w in words:
         assert w in err, f"{w!r} not in:\n{err}"
     assert sorted(tmp_path.rglob("*")) == before, "something was written"
+
+
+# ------------------------------------------------------------------ bearingsim calibrate
+def _rec(n=24000, fs=12000.0, bad=None, shape=None):
+    """A healthy-looking record (noise and a shaft line) of n samples."""
+    import numpy as np
+
+    x = np.random.default_rng(0).standard_normal(n) * 0.07 + 0.01 * np.sin(2 * np.pi * 29.9 * np.arange(n) / fs)
+    if bad is not None:
+        x[n // 2] = bad
+    return x if shape is None else np.resize(x, shape)
+
+
+#: id -> (file name, writer(path) or bytes / text, extra arguments, words the message must contain)
+CALIBRATE = {
+    "missing record": ("r.npz", None, [], ["no such record file"]),
+    "record is a directory": ("r.npz", "DIR", [], ["is a directory"]),
+    "unreadable record": ("r.npy", b"\x00garbage\xff" * 40, ["--sample-rate-Hz", "12000", "--unit", "g"],
+                          ["cannot read the record"]),
+    "unknown record format": ("r.wav", b"RIFF....WAVE", [], ["unknown record format", ".npz"]),
+    "csv of words": ("r.csv", "time,acc\n0,1\n", ["--sample-rate-Hz", "12000", "--unit", "g"],
+                     ["not a column of numbers"]),
+    "no sample rate": ("r.npy", lambda p: __import__("numpy").save(p, _rec()), ["--unit", "g"],
+                       ["no sample rate", "--sample-rate-Hz"]),
+    "zero sample rate": ("r.npy", lambda p: __import__("numpy").save(p, _rec()),
+                         ["--unit", "g", "--sample-rate-Hz", "0"], ["sample rate 0.0 Hz", "finite sample rate > 0"]),
+    "negative sample rate": ("r.npy", lambda p: __import__("numpy").save(p, _rec()),
+                             ["--unit", "g", "--sample-rate-Hz", "-12000"], ["finite sample rate > 0"]),
+    "sample rate too low": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), fs=2000.0, units="g"), [],
+                            ["sample rate 2000 Hz is too low", "at least 2400 Hz"]),
+    "sample rate disagrees with the file": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), fs=12000.0,
+                                                                                     units="g"),
+                                            ["--sample-rate-Hz", "48000"], ["disagrees with the file's fs"]),
+    "too short": ("r.npy", lambda p: __import__("numpy").save(p, _rec(6000)),
+                  ["--unit", "g", "--sample-rate-Hz", "12000"], ["0.5 s", "too short", "at least 1 s"]),
+    "nan sample": ("r.npy", lambda p: __import__("numpy").save(p, _rec(bad=float("nan"))),
+                   ["--unit", "g", "--sample-rate-Hz", "12000"], ["1 of 24000 samples are NaN or infinite"]),
+    "infinite sample": ("r.csv", lambda p: p.write_text("\n".join(str(v) for v in _rec(bad=float("inf")))),
+                        ["--unit", "g", "--sample-rate-Hz", "12000"], ["NaN or infinite"]),
+    "two columns": ("r.npy", lambda p: __import__("numpy").save(p, _rec(shape=(12000, 2))),
+                    ["--unit", "g", "--sample-rate-Hz", "12000"], ["shape (12000, 2)", "one channel"]),
+    "empty record": ("r.npy", lambda p: __import__("numpy").save(p, _rec()[:0]),
+                     ["--unit", "g", "--sample-rate-Hz", "12000"], ["empty"]),
+    "constant record": ("r.npy", lambda p: __import__("numpy").save(p, _rec() * 0 + 1.0),
+                        ["--unit", "g", "--sample-rate-Hz", "12000"], ["all samples are equal"]),
+    "unknown channel": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), FE=_rec(), fs=12000.0, units="g"),
+                        ["--channel", "BA"], ["no channel 'BA'", "DE, FE"]),
+    "no unit": ("r.npy", lambda p: __import__("numpy").save(p, _rec()), ["--sample-rate-Hz", "12000"],
+                ["does not say its unit", "--unit g or --unit m/s^2"]),
+    "fault without class": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), fs=12000.0, units="g"),
+                            ["--fault", "FILE"], ["needs its class", "--fault-class"]),
+    "class without fault": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), fs=12000.0, units="g"),
+                            ["--fault-class", "outer"], ["without a fault record"]),
+    "bad item count": ("r.npz", lambda p: __import__("numpy").savez(p, DE=_rec(), fs=12000.0, units="g"),
+                       ["--count", "0"], ["dataset.count"]),
+}
+
+
+@pytest.mark.parametrize("name", list(CALIBRATE))
+def test_calibrate_bad_input_exit_2_named_nothing_written(name, tmp_path, capsys):
+    fname, content, extra, words = CALIBRATE[name]
+    path = tmp_path / fname
+    if content == "DIR":
+        path.mkdir()
+    elif isinstance(content, bytes):
+        path.write_bytes(content)
+    elif isinstance(content, str):
+        path.write_text(content)
+    elif content is not None:
+        content(path)
+    extra = [str(path) if a == "FILE" else a for a in extra]
+    before = sorted(tmp_path.rglob("*"))
+    assert main(["calibrate", str(path), "-o", str(tmp_path / "out" / "spec.toml"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("bearingsim: error: ") and "Traceback" not in err
+    if name not in ("bad item count", "class without fault"):      # arguments, not the file
+        assert str(path) in err, f"the message does not name {path}:\n{err}"
+    for w in words:
+        assert w in err, f"{w!r} not in:\n{err}"
+    assert sorted(tmp_path.rglob("*")) == before, "something was written"
