@@ -52,7 +52,9 @@ levels
     simulated with the spec at the record's speed (no background, signal gain 1, the transfer
     paths drawn as in the data set); the gain is sqrt(max(rms_fault^2 - rms_healthy^2, 0)) /
     median(rms of the items), and ``dataset.signal_gain`` becomes [gain / 3, 3 gain]
-    (:data:`GAIN_SPREAD`).  Without one the template's range stays.
+    (:data:`GAIN_SPREAD`) and the template's ``fault_snr_dB`` (a level relative to the
+    background) is dropped: the fitted level replaces it.  Without one the template's ranges
+    stay (``fault_snr_dB``: fault levels relative to this machine's fitted background).
 
 The spec: the template case (geometry, materials, structure, [dataset] classes and size ranges)
 with ``dynamics.sample_rate_Hz`` = the record's rate, the [dynamics] measurement noise off (the
@@ -132,6 +134,7 @@ def _fit_gain(raw, fault_class, rpm, excess, fs, items=GAIN_ITEMS, seed=0, tmpdi
         ds[f"{c}_fraction"] = 1.0 if c == fault_class else 0.0
     ds.update(count=int(items), chunk=int(items), speed_rpm=[float(rpm), float(rpm)], background="none",
               signal_gain=[1.0, 1.0], seed=int(seed))
+    ds.pop("fault_snr_dB", None)         # the bearing's own signal, unscaled
     case = case_from_dict(r, "<signal gain fit>")
     with tempfile.TemporaryDirectory(dir=tmpdir) as d:
         path = Path(d) / "gain.h5"
@@ -257,6 +260,7 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
         gain, sim = _fit_gain(probe.raw, fault_class, 60.0 * frf, excess, fs, gain_items)
         gain_range = (round(gain / GAIN_SPREAD, 5), round(gain * GAIN_SPREAD, 5))
         ds["signal_gain"] = list(gain_range)
+        ds.pop("fault_snr_dB", None)     # the fitted level replaces the template's ratio to the background
         fault_info = {"class": fault_class, "rpm": 60.0 * frf, "rms_m_s2": rms_f, "healthy_rms_m_s2": rms_h,
                       "excess_rms_m_s2": excess, "simulated_rms_m_s2": sim, "items": int(gain_items)}
     header = ("Data set spec calibrated to a machine by `bearingsim calibrate` (docs/realism.md,\n"
