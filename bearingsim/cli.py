@@ -3,7 +3,8 @@
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
 are the ``exit_code`` of the :mod:`bearingsim.errors` classes: 0 success, 2 bad input, 3 a solve
-did not converge, 4 an output could not be written.
+did not converge, 4 an output could not be written, 5 the Dask cluster cannot be reached, 130
+interrupted (Ctrl-C / SIGTERM: one line, nothing half-written).
 """
 from __future__ import annotations
 
@@ -151,7 +152,13 @@ def cmd_dataset(args):
     from .dataset import DatasetResult
 
     case = load_case(args.spec)
-    s = workflows.dataset_case(case, args.output, throw=False, progress=True)
+    if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
+        s = workflows.dataset_case(case, args.output, throw=False, progress=True)
+    else:
+        from .distributed import DaskRunner
+
+        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
+            s = workflows.dataset_case(case, args.output, throw=False, progress=True, runner=runner)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
           f"({s.seconds_per_item:.3f} s per item, compilation included)")
     if s.failed:
@@ -229,10 +236,15 @@ def build_parser():
     _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
              positional=("input", "OUT.h5", "a `bearingsim simulate` output"),
              plot=("PNG", "write the envelope spectrum plot"))
-    _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
+    s = _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
+    where = s.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help="run the chunks on a local Dask cluster "
+                       "of N worker processes (pip install 'bearingsim[distributed]'); same file")
+    where.add_argument("--scheduler", metavar="ADDRESS|FILE", help="run the chunks on an existing Dask "
+                       "cluster: scheduler address (tcp://HOST:8786) or scheduler file; same file")
     _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",

@@ -279,12 +279,14 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     return Comparison(res, idx, qs, rows)
 
 
-def dataset_case(case, path, *, throw=True, progress=False):
+def dataset_case(case, path, *, throw=True, progress=False, runner=None):
     """Simulate the case's ``[dataset]`` into ``path`` (HDF5; ``dataset.make_dataset``).  Items
-    that failed are in the file with a zero signal and a code; ``throw`` raises after writing."""
+    that failed are in the file with a zero signal and a code; ``throw`` raises after writing.
+    ``runner``: a :class:`bearingsim.distributed.DaskRunner` to run the chunks on a Dask cluster
+    (same file); None runs them in this process."""
     from .dataset import make_dataset
 
-    summary = make_dataset(case, path, progress=progress)
+    summary = make_dataset(case, path, progress=progress, runner=runner)
     if throw and summary.failed:
         raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
                                 f"set failed (written to {path} with labels/result != 0)")
