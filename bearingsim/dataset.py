@@ -622,7 +622,11 @@ def make_dataset(case, path, progress=True, runner=None) -> DatasetSummary:
     except (_Stop, KeyboardInterrupt) as e:
         if bar is not None:
             bar.close()
-        how = e.name if isinstance(e, _Stop) else "SIGINT"
+        how = e.name if isinstance(e, _Stop) else (str(e) if str(e) in ("SIGINT", "SIGTERM") else "SIGINT")
+        if folder.is_dir() and not any(folder.glob("chunk_*.npz")):     # nothing worth keeping
+            shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
+            raise Interrupted(f"{how}: stopped before the first chunk finished; nothing written") from None
         raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
                           "the same command again to continue") from None
     failed = lab["result"] != 0

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import ClusterError, InputError
@@ -65,6 +67,13 @@ class JaxWorkerSetup(_PluginBase):
         self.min_compile_time_s = min_compile_time_s
 
     def setup(self, worker=None):
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            # Ctrl-C in a terminal reaches every process of the group: the client stops the run
+            # and closes the cluster; a worker does not die of it on its own (nor print a traceback)
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         if self.cache_dir:
             os.environ["JAX_COMPILATION_CACHE_DIR"] = self.cache_dir
             if self.min_compile_time_s is not None:
@@ -113,20 +122,37 @@ class DaskRunner:
         self.timeout = timeout
         self.client = None
         self.cluster = None
+        self.log = None
 
     # ------------------------------------------------------------------ lifetime
     def __enter__(self):
         require_dask()
-        from distributed import Client, LocalCluster
-
         for name in ("distributed", "tornado"):       # the client speaks through bearingsim's messages
             logging.getLogger(name).setLevel(logging.ERROR)
+        try:
+            self._start()
+        except BaseException:                 # Ctrl-C while the workers start: none is left running
+            self.close()
+            raise
+        return self
+
+    def _start(self):
+        from distributed import Client, LocalCluster
+
         min_t = os.environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS")
         try:
             if self.workers is not None:
-                self.cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                # the scheduler first (in this process), then the workers: an interrupt while they
+                # start finds self.cluster set, and close() stops every worker process.  The worker
+                # processes' stderr is a log file (self.log), not the terminal: their start-up
+                # messages (and a worker killed by a Ctrl-C that reached the whole process group
+                # while it imported) do not mix with the progress bar and bearingsim's one line
+                self.cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
                                             dashboard_address=None, silence_logs=logging.ERROR)
                 self.client = Client(self.cluster)
+                with self._stderr_to_log():
+                    self.cluster.scale(self.workers)
+                    self.client.wait_for_workers(self.workers)
             else:
                 self.client = Client(timeout=self.timeout, **_scheduler_target(self.scheduler))
         except ClusterError:
@@ -139,20 +165,42 @@ class DaskRunner:
                                "check the address (tcp://HOST:PORT) or scheduler file, that the scheduler "
                                "runs and that this machine can reach its port") from None
         self.client.register_plugin(JaxWorkerSetup(self.cache_dir, min_t))
-        return self
+
+    @contextmanager
+    def _stderr_to_log(self):
+        import tempfile
+
+        fd, self.log = tempfile.mkstemp(prefix="bearingsim-dask-workers-", suffix=".log")
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(fd, 2)
+        os.close(fd)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
 
     def __exit__(self, *exc):
         self.close()
         return False
 
     def close(self):
-        for obj in (self.client, self.cluster):
-            if obj is not None:
-                try:
-                    obj.close()
-                except Exception:               # closing after an interrupt: nothing more to save
-                    pass
-        self.client = self.cluster = None
+        logging.disable(logging.CRITICAL)          # workers stopped mid-start log their failure
+        try:
+            for obj in (self.client, self.cluster):
+                if obj is not None:
+                    try:
+                        obj.close()
+                    except BaseException:           # closing after an interrupt: nothing to save
+                        pass
+        finally:
+            logging.disable(logging.NOTSET)
+            self.client = self.cluster = None
+            if self.log:
+                Path(self.log).unlink(missing_ok=True)
+                self.log = None
 
     @property
     def n_workers(self) -> int:
