@@ -8,6 +8,7 @@ interrupted (Ctrl-C / SIGTERM: one line, nothing half-written).
 """
 from __future__ import annotations
 
+import _thread
 import argparse
 import os
 import shutil
@@ -308,6 +309,17 @@ def _stop(signum, frame):
     raise KeyboardInterrupt(_stopped_by[0])
 
 
+def _unraisable(u, default=sys.unraisablehook):
+    """An interrupt raised inside a callback that ignores exceptions (e.g. JAX's garbage-collector
+    hook) is raised again in the main thread at the next bytecode, not printed as ignored."""
+    if _stopped_by and isinstance(u.exc_value, KeyboardInterrupt):
+        t = threading.Timer(0.05, _thread.interrupt_main, (signal.SIGINT,))   # not from inside the hook
+        t.daemon = True
+        t.start()
+        return
+    default(u)
+
+
 def _stop_handlers():
     """SIGINT and SIGTERM raise KeyboardInterrupt (finally blocks remove temporary files);
     returns the handlers to restore (none outside the main thread)."""
@@ -322,6 +334,7 @@ def main(argv=None):
     _stopped_by.clear()
     _outputs.clear()
     old = _stop_handlers()
+    old_hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
         import matplotlib
 
@@ -352,6 +365,7 @@ def main(argv=None):
     finally:
         for sg, h in old.items():
             signal.signal(sg, h)
+        sys.unraisablehook = old_hook
         while _watchdog:
             _watchdog.pop().cancel()
 
