@@ -216,7 +216,7 @@ class DaskRunner:
         items = list(items)
         if not items:
             return
-        shared_f = self.client.scatter(shared, broadcast=True, hash=False)
+        [shared_f] = self.client.scatter([shared], broadcast=True, hash=False)   # one object, even a tuple
         pending = iter(items)
         owner = {}
         ac = as_completed()
