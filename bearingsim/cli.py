@@ -98,7 +98,13 @@ def cmd_sweep(args):
 def cmd_study(args):
     case = load_case(args.case)
     budget.check_case(case, "study", args.output)
-    study = workflows.study_case(case, throw=False, progress=True)
+    if args.workers is None and args.scheduler is None:
+        study = workflows.study_case(case, throw=False, progress=True)
+    else:
+        from .distributed import DaskRunner
+
+        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
+            study = workflows.study_case(case, throw=False, progress=True, runner=runner)
     _warn_failures(study.solution.result, "study states")
     io.write_study(args.output, case, study)
     print(report.study_text(case, study))
@@ -234,6 +240,14 @@ def _command(sub, name, func, help, positional=_CASE, output=False, plot=None):
     return s
 
 
+def _cluster_flags(s, what):
+    where = s.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help=f"run {what} on a local Dask cluster "
+                       "of N worker processes (pip install 'bearingsim[distributed]'); same file")
+    where.add_argument("--scheduler", metavar="ADDRESS|FILE", help=f"run {what} on an existing Dask "
+                       "cluster: scheduler address (tcp://HOST:8786) or scheduler file; same file")
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="bearingsim", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -244,8 +258,9 @@ def build_parser():
     s.add_argument("--json", metavar="OUT.json", help="write the solution as JSON")
     _command(sub, "sweep", cmd_sweep, "quasi-static states over cage angles as the balls pass the spall",
              output=True, plot=plots_into)
-    _command(sub, "study", cmd_study, "a cage-angle sweep for each value of one case key ([study])",
-             output=True, plot=plots_into)
+    s = _command(sub, "study", cmd_study, "a cage-angle sweep for each value of one case key ([study])",
+                 output=True, plot=plots_into)
+    _cluster_flags(s, "the sweeps of a geometry, material or defect study")
     _command(sub, "simulate", cmd_simulate, "dynamic simulation (shaft, housing, sensor resonator) "
              "with the Jones bearing forces; HDF5 output", output=True, plot=plots_into)
     _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
@@ -255,11 +270,7 @@ def build_parser():
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
-    where = s.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, metavar="N", help="run the chunks on a local Dask cluster "
-                       "of N worker processes (pip install 'bearingsim[distributed]'); same file")
-    where.add_argument("--scheduler", metavar="ADDRESS|FILE", help="run the chunks on an existing Dask "
-                       "cluster: scheduler address (tcp://HOST:8786) or scheduler file; same file")
+    _cluster_flags(s, "the chunks")
     _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",

@@ -155,13 +155,24 @@ def _study_sweep(c, grid):
     return sweep(c.bearing(), c.operation(), c.loads(), c.spall(), angles=grid, hertz_method=c.hertz_method)
 
 
-def study_case(case, *, throw=True, progress=False) -> Study:
+def _study_value(shared, m):
+    """The sweep of study value ``m`` (one task of a study on a Dask cluster), as NumPy arrays."""
+    import jax
+
+    cases, grids = shared
+    return jax.tree_util.tree_map(np.asarray, _study_sweep(cases[m], grids[m]))
+
+
+def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     """One cage-angle sweep (the case's ``[sweep]`` grid, no edge insertion) per ``[study]`` value.
 
     Studies of a ``[load]``, ``[operation]`` or ``[sweep]`` key (loads, speed, the sweep angles)
     are solved as one batch: ``jones.solve_batch`` over every value and angle, in chunks of at
     most STUDY_CHUNK states (a value with a state that fails there is redone by continuation).
-    Other keys (geometry, material, spall) run one compiled sweep per value.  Raises InputError
+    Other keys (geometry, material, spall) run one compiled sweep per value; with ``runner`` (a
+    :class:`bearingsim.distributed.DaskRunner`) those sweeps run on a Dask cluster, one value per
+    task, with the same numbers (a batched study stays in this process: it is one vmapped solve
+    already, docs/scale.md).  Raises InputError
     without ``[study]`` or for a key that changes the shape of the results (``bearing.balls``,
     ``sweep.steps``)."""
     import jax
@@ -183,6 +194,12 @@ def study_case(case, *, throw=True, progress=False) -> Study:
             sol = _study_batch(cases, grids, bar)
             for m in np.flatnonzero(np.any(np.asarray(sol.result) != 0, axis=1)):
                 sol = _replace_row(sol, int(m), _study_sweep(cases[m], grids[m]))
+        elif runner is not None:
+            rows = [None] * len(cases)
+            for m, row in runner.imap(_study_value, (cases, grids), range(len(cases))):
+                rows[m] = row
+                bar.update(grids[m].size)
+            sol = _stack(rows)
         else:
             rows = []
             for c, grid in zip(cases, grids):

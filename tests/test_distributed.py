@@ -127,3 +127,18 @@ def test_unreachable_scheduler_is_one_message(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "no such scheduler file" in err and "Traceback" not in err
     assert sorted(q.name for q in tmp_path.iterdir()) == ["spec.toml"]
+
+
+def test_study_on_the_cluster_equals_the_in_process_study(runner):
+    """A study of a defect key (one compiled sweep per value) with its sweeps on 2 workers: the
+    same numbers as in this process."""
+    import jax
+
+    from bearingsim.workflows import study_case
+    from test_workflows import study
+
+    case = study("defect.depth_mm", [0.0, 0.3])
+    here = study_case(case)
+    there = study_case(case, runner=runner)
+    for a, b in zip(jax.tree_util.tree_leaves(here.solution), jax.tree_util.tree_leaves(there.solution)):
+        assert np.asarray(a).tobytes() == np.asarray(b).tobytes()
