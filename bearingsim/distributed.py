@@ -148,7 +148,8 @@ class DaskRunner:
                 # messages (and a worker killed by a Ctrl-C that reached the whole process group
                 # while it imported) do not mix with the progress bar and bearingsim's one line
                 self.cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
-                                            dashboard_address=None, silence_logs=logging.ERROR)
+                                            dashboard_address=":0",      # a free port: no clash, no warning
+                                            silence_logs=logging.ERROR)
                 self.client = Client(self.cluster)
                 with self._stderr_to_log():
                     self.cluster.scale(self.workers)
