@@ -4,7 +4,24 @@ Pipeline: geometry -> hertz -> jones (+defect) -> sweep -> dynamics -> signal,
 with case/io/plots/cli at the edge.  The core (everything up to ``signal``)
 is pure JAX in float64 and knows nothing of files or printing.
 """
-import jax as _jax
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "bearingsim" and "__mp_main__" not in _sys.modules:
+    # the `bearingsim` command (not its Dask worker processes): Ctrl-C / SIGTERM while the
+    # libraries load (nothing is written yet) is one line and exit 130; bearingsim.cli.main
+    # installs its own handlers once they are loaded
+    import signal as _signal
+
+    def _stopped_while_loading(signum, frame):
+        _os.write(2, f"bearingsim: {_signal.Signals(signum).name}: interrupted while starting; "
+                     "nothing written\n".encode())
+        _os._exit(130)
+
+    for _sg in (_signal.SIGINT, _signal.SIGTERM):
+        _signal.signal(_sg, _stopped_while_loading)
+
+import jax as _jax  # noqa: E402
 
 _jax.config.update("jax_enable_x64", True)
 

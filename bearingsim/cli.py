@@ -3,18 +3,24 @@
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
 are the ``exit_code`` of the :mod:`bearingsim.errors` classes: 0 success, 2 bad input, 3 a solve
-did not converge, 4 an output could not be written.
+did not converge, 4 an output could not be written, 5 the Dask cluster cannot be reached, 130
+interrupted (Ctrl-C / SIGTERM: one line, nothing half-written).
 """
 from __future__ import annotations
 
+import _thread
 import argparse
+import os
+import shutil
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
-from . import io, report, workflows
+from . import budget, io, report, workflows
 from .case import load_case
 from .case.units import from_si
 from .errors import BearingsimError, OutputError
@@ -84,13 +90,22 @@ def _sweep(case, output, plot_dir):
 
 
 def cmd_sweep(args):
-    _sweep(load_case(args.case), args.output, args.plot)
+    case = load_case(args.case)
+    budget.check_case(case, "sweep", args.output)
+    _sweep(case, args.output, args.plot)
     return 0
 
 
 def cmd_study(args):
     case = load_case(args.case)
-    study = workflows.study_case(case, throw=False, progress=True)
+    budget.check_case(case, "study", args.output)
+    if args.workers is None and args.scheduler is None:
+        study = workflows.study_case(case, throw=False, progress=True)
+    else:
+        from .distributed import DaskRunner
+
+        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
+            study = workflows.study_case(case, throw=False, progress=True, runner=runner)
     _warn_failures(study.solution.result, "study states")
     io.write_study(args.output, case, study)
     print(report.study_text(case, study))
@@ -123,7 +138,9 @@ def _simulate(case, output, plot_dir):
 
 
 def cmd_simulate(args):
-    _simulate(load_case(args.case), args.output, args.plot)
+    case = load_case(args.case)
+    budget.check_case(case, "simulate", args.output)
+    _simulate(case, args.output, args.plot)
     return 0
 
 
@@ -152,7 +169,16 @@ def cmd_dataset(args):
     from .dataset import DatasetResult
 
     case = load_case(args.spec)
-    s = workflows.dataset_case(case, args.output, throw=False, progress=True)
+    est = budget.check_case(case, "dataset", args.output)
+    if est is not None:
+        print(est.text(args.workers or 1), flush=True)
+    if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
+        s = workflows.dataset_case(case, args.output, throw=False, progress=True)
+    else:
+        from .distributed import DaskRunner
+
+        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
+            s = workflows.dataset_case(case, args.output, throw=False, progress=True, runner=runner)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
           f"({s.seconds_per_item:.3f} s per item, compilation included)")
     if s.failed:
@@ -178,6 +204,7 @@ def cmd_calibrate(args):
 
 def cmd_compare(args):
     case = load_case(args.case)
+    budget.check_case(case, "compare")
     cmp = workflows.compare_case(case, throw=False)
     print(report.compare_text(case, cmp))
     if args.plot:
@@ -192,6 +219,7 @@ def cmd_compare(args):
 def cmd_demo(args):
     case = load_case(args.case or "demo")
     out = Path(args.out)
+    budget.check_case(case, "demo", out / "simulate.h5")
     t0 = time.time()
     print(f"bearingsim demo: {case.source}\n")
     print(report.info_text(case), "\n")
@@ -224,6 +252,14 @@ def _command(sub, name, func, help, positional=_CASE, output=False, plot=None):
     return s
 
 
+def _cluster_flags(s, what):
+    where = s.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help=f"run {what} on a local Dask cluster "
+                       "of N worker processes (pip install 'bearingsim[distributed]'); same file")
+    where.add_argument("--scheduler", metavar="ADDRESS|FILE", help=f"run {what} on an existing Dask "
+                       "cluster: scheduler address (tcp://HOST:8786) or scheduler file; same file")
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="bearingsim", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -234,14 +270,15 @@ def build_parser():
     s.add_argument("--json", metavar="OUT.json", help="write the solution as JSON")
     _command(sub, "sweep", cmd_sweep, "quasi-static states over cage angles as the balls pass the spall",
              output=True, plot=plots_into)
-    _command(sub, "study", cmd_study, "a cage-angle sweep for each value of one case key ([study])",
-             output=True, plot=plots_into)
+    s = _command(sub, "study", cmd_study, "a cage-angle sweep for each value of one case key ([study])",
+                 output=True, plot=plots_into)
+    _cluster_flags(s, "the sweeps of a geometry, material or defect study")
     _command(sub, "simulate", cmd_simulate, "dynamic simulation (shaft, housing, sensor resonator) "
              "with the Jones bearing forces; HDF5 output", output=True, plot=plots_into)
     _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
              positional=("input", "OUT.h5", "a `bearingsim simulate` output"),
              plot=("PNG", "write the envelope spectrum plot"))
-    _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
+    s = _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
@@ -261,6 +298,7 @@ def build_parser():
     s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
     s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
     s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
+    _cluster_flags(s, "the chunks")
     _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
@@ -270,19 +308,116 @@ def build_parser():
     return p
 
 
-def main(argv=None):
-    import matplotlib
+#: the signal that stopped the run (set by the handler, so that an interrupt that a library
+#: wrapped in its own exception while it ran, e.g. JAX while tracing, is still told as one line)
+_stopped_by = []
 
-    matplotlib.use("Agg")          # files only, no display needed
-    args = build_parser().parse_args(argv)
+
+#: seconds the run has, after a Ctrl-C / SIGTERM, to unwind (and clean up) on its own
+HARD_STOP_S = 10.0
+_watchdog = []
+#: outputs of the running command (their temporary files are removed by a hard stop)
+_outputs = []
+
+
+def _hard_stop():
+    """The interrupt was swallowed (raised inside a callback that ignores exceptions, e.g. a
+    garbage-collector hook) or the run is stuck in a library: remove this command's temporary
+    files, say so in one line, exit 130 now."""
+    for out in _outputs:
+        p = Path(out)
+        for tmp in p.parent.glob(f".{p.name}.*.tmp"):
+            tmp.unlink(missing_ok=True)
+        part = p.with_name(p.name + ".partial")
+        if part.is_dir():
+            for tmp in part.glob(".*.tmp"):
+                tmp.unlink(missing_ok=True)
+            if not any(part.glob("chunk_*.npz")):
+                shutil.rmtree(part, ignore_errors=True)
+    os.write(2, f"bearingsim: {_stopped_by[0]}: interrupted; no output is half-written\n".encode())
+    os._exit(130)
+
+
+def _stop(signum, frame):
+    _stopped_by.append(signal.Signals(signum).name)
+    if not _watchdog:
+        t = threading.Timer(HARD_STOP_S, _hard_stop)
+        t.daemon = True
+        t.start()
+        _watchdog.append(t)
+    raise KeyboardInterrupt(_stopped_by[0])
+
+
+def _unraisable(u, default=sys.unraisablehook):
+    """An interrupt raised inside a callback that ignores exceptions (e.g. JAX's garbage-collector
+    hook) is raised again in the main thread at the next bytecode, not printed as ignored."""
+    if _stopped_by and isinstance(u.exc_value, KeyboardInterrupt):
+        t = threading.Timer(0.05, _thread.interrupt_main, (signal.SIGINT,))   # not from inside the hook
+        t.daemon = True
+        t.start()
+        return
+    default(u)
+
+
+def _stop_handlers():
+    """SIGINT and SIGTERM raise KeyboardInterrupt (finally blocks remove temporary files);
+    returns the handlers to restore (none outside the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {sg: signal.signal(sg, _stop) for sg in (signal.SIGINT, signal.SIGTERM)}
+
+
+def main(argv=None):
+    """Run ``bearingsim ARGS``; returns the exit code (Ctrl-C / SIGTERM at any moment: one
+    line, 130, nothing half-written: every file is written atomically)."""
+    _stopped_by.clear()
+    _outputs.clear()
+    old = _stop_handlers()
+    old_hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
+        import matplotlib
+
+        matplotlib.use("Agg")          # files only, no display needed
+        args = build_parser().parse_args(argv)
+        for flag in ("output", "json"):
+            budget.check_output(getattr(args, flag, None), "-o" if flag == "output" else "--json")
+            if getattr(args, flag, None):
+                _outputs.append(getattr(args, flag))
         return args.func(args)
-    except BearingsimError as e:     # the one place where errors become exit codes
-        print(f"bearingsim: error: {e}", file=sys.stderr)
-        return e.exit_code
-    except OSError as e:             # a file the system refused outside bearingsim.io (plots)
-        print(f"bearingsim: error: cannot write output: {e}", file=sys.stderr)
-        return OutputError.exit_code
+    except BaseException as e:       # the one place where errors become exit codes
+        if isinstance(e, SystemExit):
+            raise
+        if _stopped_by or isinstance(e, KeyboardInterrupt) or getattr(e, "exit_code", None) == 130:
+            if isinstance(e, BearingsimError) and e.exit_code == 130:    # says what was kept
+                print(f"bearingsim: {e}", file=sys.stderr)
+            else:
+                how = _stopped_by[0] if _stopped_by else "SIGINT"
+                print(f"bearingsim: {how}: interrupted; no output is half-written", file=sys.stderr)
+            return 130
+        if isinstance(e, BearingsimError):
+            print(f"bearingsim: error: {e}", file=sys.stderr)
+            return e.exit_code
+        if isinstance(e, OSError):   # a file the system refused outside bearingsim.io (plots)
+            print(f"bearingsim: error: cannot write output: {e}", file=sys.stderr)
+            return OutputError.exit_code
+        raise
+    finally:
+        for sg, h in old.items():
+            signal.signal(sg, h)
+        sys.unraisablehook = old_hook
+        while _watchdog:
+            _watchdog.pop().cancel()
+
+
+def run():
+    """The ``bearingsim`` console command: :func:`main`, and after an interrupt an immediate
+    exit (compilations still running in background threads are not waited for)."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
 
 
 #: kept for tests/test_dynamics.py (owned by the core) until it calls workflows.compare_case
@@ -290,4 +425,4 @@ compare_static_dynamic = workflows.compare_case
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

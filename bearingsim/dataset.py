@@ -60,7 +60,7 @@ from .case import check_sampling
 from .case.units import from_si, to_si
 from .errors import BearingsimError, InputError, ResultCode
 
-__all__ = ["CLASSES", "SPLITS", "transfer_paths", "item_background", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
+__all__ = ["ChunkPlan", "simulate_chunk", "serial_imap", "pit_depths_batch", "CLASSES", "SPLITS", "transfer_paths", "item_background", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
            "item_seeds", "make_dataset", "partial_path", "pit_depths", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
@@ -351,7 +351,7 @@ def item_seeds(seed, n) -> np.ndarray:
                     dtype=np.uint32)
 
 
-def pit_depths(case, lab, chunk, slots, profile="rectangular"):
+def pit_depths(case, lab, chunk, slots, profile="rectangular", imap=None):
     """(depth in m, ok, unbridged fraction) per item for ``[dataset] depth_rule = "pit"`` (and
     for the pass-to-pass variability, which scales with the unbridged fraction of the item's
     pit under the same contact, :func:`bearingsim.pit.pit_unbridged_fraction`): every fault item's defect
@@ -366,42 +366,54 @@ def pit_depths(case, lab, chunk, slots, profile="rectangular"):
     slots: the program the simulation compiles anyway), with ball 0 at the pit for an outer-race
     pit and at the load-zone centre (azimuth 0: the radial load is along +x) for an inner-race or
     ball pit.  ``ok`` is False where that state did not converge (the item is then flagged
-    ``pit_contact``); healthy items get 0 (depth and fraction)."""
+    ``pit_contact``); healthy items get 0 (depth and fraction).  ``imap`` runs the batches
+    (:func:`serial_imap` by default; :mod:`bearingsim.distributed` on a Dask cluster): each is
+    :func:`pit_depths_batch` of the same items, so the numbers do not depend on where it ran."""
+    n = lab.size
+    out, ok, unbridged = np.zeros(n), np.ones(n, bool), np.zeros(n)
+    faulty = np.flatnonzero(~lab["healthy"])
+    batches = [faulty[k:k + chunk] for k in range(0, faulty.size, chunk)]
+    for idx, (d, good, u) in (imap or serial_imap)(pit_depths_batch, (case, lab, chunk, slots, profile), batches):
+        out[idx], ok[idx], unbridged[idx] = d, good, u
+    return out, ok, unbridged
+
+
+def pit_depths_batch(shared, idx):
+    """(depth in m, ok, unbridged fraction) of the fault items ``idx`` (at most ``chunk``; padded
+    to ``chunk`` so that every batch is one program): one batch of :func:`pit_depths`; ``shared``
+    is ``(case, lab, chunk, slots, profile)``."""
     import jax
     import jax.numpy as jnp
 
     from .kinematics import Operation
     from .pit import pit_depth_of_solution, pit_unbridged_fraction
 
+    case, lab, chunk, slots, profile = shared
     b = case.bearing()
-    n = lab.size
     loc = item_locations(lab)
     w = to_si(lab["spall_length_mm"], "mm")
     machined = to_si(lab["spall_depth_mm"], "mm")
     center = to_si(lab["spall_center_deg"], "deg")
     control = case.data["operation"]["raceway_control"]
-    out, ok, unbridged = np.zeros(n), np.ones(n, bool), np.zeros(n)
-    faulty = np.flatnonzero(~lab["healthy"])
-    for k in range(0, faulty.size, chunk):
-        idx = faulty[k:k + chunk]
-        pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - idx.size)])
-        m = pad.size
-        one = jnp.ones(m)
-        op = Operation(jnp.asarray(2 * np.pi * lab["speed_rpm"][pad] / 60.0), control, one, one)
-        F = np.zeros((m, 5))
-        F[:, 0], F[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
-        th = np.where(loc[pad] == "outer", center[pad], 0.0)
-        zero = np.zeros(m)
-        slots_h = dynamics.defect_slots(loc[pad], zero, zero, zero, profile, slots)
-        sols = dynamics.quasi_static_batch(b, op, jnp.asarray(F), jnp.asarray(th), slots_h, case.hertz_method)
-        host = jax.tree_util.tree_map(np.asarray, sols)
-        for j, i in enumerate(idx):
-            if int(host.result[j]) != 0:
-                ok[i] = False
-                continue
-            sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
-            out[i] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
-            unbridged[i] = pit_unbridged_fraction(sol_j, b, 0, str(loc[i]), w[i])
+    out, ok, unbridged = np.zeros(idx.size), np.ones(idx.size, bool), np.zeros(idx.size)
+    pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - idx.size)])
+    m = pad.size
+    one = jnp.ones(m)
+    op = Operation(jnp.asarray(2 * np.pi * lab["speed_rpm"][pad] / 60.0), control, one, one)
+    F = np.zeros((m, 5))
+    F[:, 0], F[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
+    th = np.where(loc[pad] == "outer", center[pad], 0.0)
+    zero = np.zeros(m)
+    slots_h = dynamics.defect_slots(loc[pad], zero, zero, zero, profile, slots)
+    sols = dynamics.quasi_static_batch(b, op, jnp.asarray(F), jnp.asarray(th), slots_h, case.hertz_method)
+    host = jax.tree_util.tree_map(np.asarray, sols)
+    for j, i in enumerate(idx):
+        if int(host.result[j]) != 0:
+            ok[j] = False
+            continue
+        sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
+        out[j] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
+        unbridged[j] = pit_unbridged_fraction(sol_j, b, 0, str(loc[i]), w[i])
     return out, ok, unbridged
 
 
@@ -592,15 +604,78 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
                 "realism_seed seeds the item's slip, speed fluctuation, noise and pass-to-pass variability")
 
 
-def make_dataset(case, path, progress=True) -> DatasetSummary:
+def serial_imap(fn, shared, items):
+    """``(item, fn(shared, item))`` for every item, in this process, in order: how the chunks of
+    a data set (and the batches of :func:`pit_depths`) run without a cluster.
+    :class:`bearingsim.distributed.DaskRunner` has the same ``imap`` on a Dask cluster."""
+    for x in items:
+        yield x, fn(shared, x)
+
+
+@dataclass(frozen=True, eq=False)
+class ChunkPlan:
+    """Everything the chunks of one data set need, drawn and fixed before any chunk runs
+    (picklable: a Dask run sends it once to every worker).  ``simulate_chunk(plan, k)`` is chunk
+    ``k``; every chunk pads to ``chunk`` items, so every chunk is the same compiled program."""
+
+    case: object
+    lab: np.ndarray
+    order: np.ndarray
+    chunk: int
+    loads: np.ndarray
+    center: np.ndarray
+    extent: np.ndarray
+    depth: np.ndarray
+    profile: str
+    params: object
+    realism: object
+    duration: float
+    fs: float
+    seeds: np.ndarray
+    ball_iterations: object
+    substeps: int
+    loc: np.ndarray
+    slots: tuple
+    pit_ok: np.ndarray
+    unbridged: np.ndarray
+    modes: np.ndarray = None        # (N, M, 3) every item's sensor modes (transfer_paths)
+    fault_snr: bool = False         # dataset.fault_snr_dB given
+
+    @property
+    def chunks(self) -> int:
+        return -(-self.lab.size // self.chunk)
+
+    def items(self, k) -> np.ndarray:
+        """Item indices of chunk ``k`` (the classes spread evenly over the chunks)."""
+        return self.order[k * self.chunk:(k + 1) * self.chunk]
+
+
+def simulate_chunk(plan: ChunkPlan, k: int) -> dict:
+    """Chunk ``k`` of a data set: the arrays of its chunk file (``index``, ``signals`` and the
+    per-item label fields the simulation fills).  A pure function of (plan, k): every item's
+    realism seed comes from (seed, item index), so the in-process loop and any Dask worker give
+    the same bytes."""
+    p = plan
+    background = item_background(p.case, _settings(p.case), p.fs)
+    return _simulate_chunk(p.case, p.case.bearing(), p.lab, p.items(k), p.chunk, p.loads, p.center,
+                           p.extent, p.depth, p.profile, p.params, p.realism, p.duration, p.fs, p.seeds,
+                           p.ball_iterations, p.substeps, p.loc, p.slots, p.pit_ok, p.unbridged, p.modes,
+                           background, p.fault_snr)
+
+
+def make_dataset(case, path, progress=True, runner=None) -> DatasetSummary:
     """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5), resumably.
 
     Finished chunks go to :func:`partial_path` at once; a rerun after an interruption continues
     from them; the file is assembled when all are there.  Ctrl-C / SIGTERM raise
-    :class:`Interrupted`.  Returns a :class:`DatasetSummary` (``failed``: items with result != 0;
-    ``seconds``: wall time of this run's simulations, compilation included)."""
+    :class:`Interrupted`.  ``runner``: an object with ``imap(fn, shared, items)`` like
+    :func:`serial_imap` (which runs when ``runner`` is None): :class:`bearingsim.distributed.DaskRunner`
+    runs the chunks on a Dask cluster; the file is the same.  Returns a :class:`DatasetSummary`
+    (``failed``: items with result != 0; ``seconds``: wall time of this run's simulations,
+    compilation included)."""
     from tqdm import tqdm
 
+    imap = serial_imap if runner is None else runner.imap
     ds = _settings(case)
     check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
     d = case.dynamics_settings()
@@ -629,7 +704,7 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     center = to_si(lab["spall_center_deg"], "deg")
     pit_ok, unbridged = np.ones(n, bool), np.zeros(n)
     if ds.get("depth_rule", "machined") == "pit" or realism.pass_variation:
-        pit, pit_ok, unbridged = pit_depths(case, lab, chunk, slots, profile)
+        pit, pit_ok, unbridged = pit_depths(case, lab, chunk, slots, profile, imap=imap)
         if ds.get("depth_rule", "machined") == "pit":
             depth = pit
     lab["unbridged_fraction"] = unbridged
@@ -643,7 +718,6 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
     lab["speed_fluctuation_percent"] = realism.speed_fluctuation_percent
     lab["noise_rms_m_s2"] = realism.noise_rms
     modes = transfer_paths(case, lab)
-    background = item_background(case, ds, fs)
     order = _order(lab["fault_class"])
     chunks = -(-n // chunk)
     folder = partial_path(path)
@@ -660,21 +734,25 @@ def make_dataset(case, path, progress=True) -> DatasetSummary:
                 sum(min(chunk, n - k * chunk) for k in todo)
             bar = tqdm(total=n, initial=done, desc="dataset", unit="item",
                        disable=None if progress else True, dynamic_ncols=True)
-            for k in todo:
-                idx = order[k * chunk:(k + 1) * chunk]
-                out = _simulate_chunk(case, b, lab, idx, chunk, loads, center, extent, depth, profile,
-                                      params, realism, duration, fs, seeds, it, sub, loc, slots, pit_ok,
-                                      unbridged, modes, background, "fault_snr_dB" in ds)
+            plan = ChunkPlan(case, lab, order, chunk, loads, center, extent, depth, profile, params,
+                             realism, duration, fs, seeds, it, sub, loc, slots, pit_ok, unbridged,
+                             modes, "fault_snr_dB" in ds)
+            for k, out in imap(simulate_chunk, plan, todo):     # finished chunks, streamed
                 _write_atomic(_chunk_file(folder, k), lambda fh: np.savez(fh, **out))
-                done += idx.size
-                bar.update(idx.size)
+                done += out["index"].size
+                bar.update(out["index"].size)
+                del out
             bar.close()
             _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, "newmark", chunks, modes)
             shutil.rmtree(folder, ignore_errors=True)
     except (_Stop, KeyboardInterrupt) as e:
         if bar is not None:
             bar.close()
-        how = e.name if isinstance(e, _Stop) else "SIGINT"
+        how = e.name if isinstance(e, _Stop) else (str(e) if str(e) in ("SIGINT", "SIGTERM") else "SIGINT")
+        if folder.is_dir() and not any(folder.glob("chunk_*.npz")):     # nothing worth keeping
+            shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
+            raise Interrupted(f"{how}: stopped before the first chunk finished; nothing written") from None
         raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
                           "the same command again to continue") from None
     failed = lab["result"] != 0

@@ -13,6 +13,8 @@
   :class:`NotConvergedError` 3 a solve did not converge
   :class:`InvalidStateError` 3 a solve ended on a state that is not physical
   :class:`OutputError`      4 a result could not be written (or was not finite)
+  :class:`ClusterError`     5 the Dask cluster of a distributed run cannot be reached
+  (interrupted)           130 Ctrl-C / SIGTERM: one line, nothing half-written
   ====================== ==== ==================================================
 
 Every entry point that can fail has ``throw=True`` by default (raise the exception) and
@@ -29,6 +31,7 @@ __all__ = [
     "NotConvergedError",
     "InvalidStateError",
     "OutputError",
+    "ClusterError",
 ]
 
 
@@ -87,3 +90,10 @@ class OutputError(BearingsimError, OSError):
     """A result could not be written, or holds non-finite values (exit code 4)."""
 
     exit_code = 4
+
+
+class ClusterError(BearingsimError, RuntimeError):
+    """The Dask cluster of a distributed run could not be reached, or lost the same task's
+    worker too often (exit code 5: the input is fine, run again when the cluster is)."""
+
+    exit_code = 5

@@ -226,13 +226,24 @@ def _study_sweep(c, grid):
     return sweep(c.bearing(), c.operation(), c.loads(), c.spall(), angles=grid, hertz_method=c.hertz_method)
 
 
-def study_case(case, *, throw=True, progress=False) -> Study:
+def _study_value(shared, m):
+    """The sweep of study value ``m`` (one task of a study on a Dask cluster), as NumPy arrays."""
+    import jax
+
+    cases, grids = shared
+    return jax.tree_util.tree_map(np.asarray, _study_sweep(cases[m], grids[m]))
+
+
+def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     """One cage-angle sweep (the case's ``[sweep]`` grid, no edge insertion) per ``[study]`` value.
 
     Studies of a ``[load]``, ``[operation]`` or ``[sweep]`` key (loads, speed, the sweep angles)
     are solved as one batch: ``jones.solve_batch`` over every value and angle, in chunks of at
     most STUDY_CHUNK states (a value with a state that fails there is redone by continuation).
-    Other keys (geometry, material, spall) run one compiled sweep per value.  Raises InputError
+    Other keys (geometry, material, spall) run one compiled sweep per value; with ``runner`` (a
+    :class:`bearingsim.distributed.DaskRunner`) those sweeps run on a Dask cluster, one value per
+    task, with the same numbers (a batched study stays in this process: it is one vmapped solve
+    already, docs/scale.md).  Raises InputError
     without ``[study]`` or for a key that changes the shape of the results (``bearing.balls``,
     ``sweep.steps``)."""
     import jax
@@ -254,6 +265,12 @@ def study_case(case, *, throw=True, progress=False) -> Study:
             sol = _study_batch(cases, grids, bar)
             for m in np.flatnonzero(np.any(np.asarray(sol.result) != 0, axis=1)):
                 sol = _replace_row(sol, int(m), _study_sweep(cases[m], grids[m]))
+        elif runner is not None:
+            rows = [None] * len(cases)
+            for m, row in runner.imap(_study_value, (cases, grids), range(len(cases))):
+                rows[m] = row
+                bar.update(grids[m].size)
+            sol = _stack(rows)
         else:
             rows = []
             for c, grid in zip(cases, grids):
@@ -350,12 +367,14 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     return Comparison(res, idx, qs, rows)
 
 
-def dataset_case(case, path, *, throw=True, progress=False):
+def dataset_case(case, path, *, throw=True, progress=False, runner=None):
     """Simulate the case's ``[dataset]`` into ``path`` (HDF5; ``dataset.make_dataset``).  Items
-    that failed are in the file with a zero signal and a code; ``throw`` raises after writing."""
+    that failed are in the file with a zero signal and a code; ``throw`` raises after writing.
+    ``runner``: a :class:`bearingsim.distributed.DaskRunner` to run the chunks on a Dask cluster
+    (same file); None runs them in this process."""
     from .dataset import make_dataset
 
-    summary = make_dataset(case, path, progress=progress)
+    summary = make_dataset(case, path, progress=progress, runner=runner)
     if throw and summary.failed:
         raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
                                 f"set failed (written to {path} with labels/result != 0)")

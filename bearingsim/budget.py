@@ -1,0 +1,167 @@
+"""What a run will need, said before it starts; what cannot fit is refused, naming the keys.
+
+``bearingsim dataset`` with ``count = 1e10`` or ``duration_s = 1e6`` used to end in a NumPy
+memory traceback after minutes of work.  Every command that sizes arrays from case keys is
+estimated here first (:func:`check_case`): memory of the largest step, disk of the output (the
+data set's ``.partial/`` chunks and its HDF5 file both), and a rough wall time on one process of
+this class of machine.  A run whose memory exceeds the machine's available memory, or whose
+output exceeds the free disk space, raises :class:`~bearingsim.errors.InputError` (exit 2)
+naming the keys that size it, before anything is written.  The per-sample costs are measured
+(``docs/scale.md``): they are estimates, meant to catch orders of magnitude, not to bill.
+
+:func:`check_output` refuses an output path that names a directory (nothing is created).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import InputError
+
+__all__ = ["Estimate", "check_case", "check_output", "dataset_estimate", "simulation_estimate",
+           "available_memory", "free_disk", "human_bytes"]
+
+#: memory of the libraries and the compiled programs of one process (JAX, XLA; measured ~0.75 GB)
+BASE_BYTES = 1.0e9
+#: memory per item-sample while a chunk (or a simulation) runs: its states, forces and signals
+#: (measured: 1.1 kB for the 6205 data sets, max RSS of 0.05 s vs 0.5 s items)
+SAMPLE_BYTES = 1.2e3
+#: wall time per item-sample of one process (measured 7-13 us on the 2-core test machine)
+SAMPLE_SECONDS = 1.0e-5
+#: bytes per quasi-static state kept (a JonesSolution: ~30 arrays of Z float64) per ball
+STATE_BYTES_PER_BALL = 30 * 8
+
+
+def human_bytes(x: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if abs(x) < 1000 or unit == "PB":
+            return f"{x:.3g} {unit}"
+        x /= 1000.0
+    return f"{x:.3g} PB"
+
+
+def _human_time(s: float) -> str:
+    for unit, f in (("years", 3.15e7), ("days", 86400), ("h", 3600), ("min", 60)):
+        if s >= f:
+            return f"{s / f:.3g} {unit}"
+    return f"{s:.2g} s"
+
+
+def available_memory():
+    """Bytes of physical memory available now (None where the system does not say)."""
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def free_disk(path):
+    """Free bytes on the file system that will hold ``path`` (its first existing ancestor)."""
+    p = Path(path).resolve()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        return shutil.disk_usage(p).free
+    except OSError:
+        return None
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What a run needs: ``memory`` (bytes, peak of one process), ``disk`` (bytes written),
+    ``seconds`` (rough wall time of one process), and the case keys that size each."""
+
+    what: str
+    memory: float
+    disk: float
+    seconds: float
+    memory_keys: tuple
+    disk_keys: tuple
+
+    def text(self, workers: int = 1) -> str:
+        t = self.seconds / max(workers, 1)
+        return (f"{self.what}: needs ~{human_bytes(self.memory)} of memory per process, "
+                f"~{human_bytes(self.disk)} of disk, ~{_human_time(t)}"
+                f"{f' on {workers} workers' if workers > 1 else ' in one process'} (rough)")
+
+    def check(self, source, output=None):
+        """Raise :class:`InputError` if the memory or the disk cannot fit (every problem at once)."""
+        problems = []
+        mem = available_memory()
+        if mem is not None and self.memory > mem:
+            problems.append(f"{self.what} needs ~{human_bytes(self.memory)} of memory, "
+                            f"{human_bytes(mem)} are available: lower " + " or ".join(self.memory_keys))
+        if output is not None and self.disk > 0:
+            free = free_disk(output)
+            if free is not None and self.disk > free:
+                problems.append(f"{self.what} writes ~{human_bytes(self.disk)} next to {output}, "
+                                f"{human_bytes(free)} are free: lower " + " or ".join(self.disk_keys))
+        if problems:
+            raise InputError(f"{source}: " + "; ".join(problems))
+
+
+def dataset_estimate(case) -> Estimate:
+    """A ``[dataset]``: chunks of ``chunk`` items x duration x sample rate samples; the labels;
+    the signals written twice (float32 chunk files in ``.partial/``, then the HDF5 file)."""
+    ds = case.data["dataset"]
+    fs = float(case.dynamics_settings()["sample_rate"])
+    n = int(ds["count"])
+    T = float(ds["duration_s"]) * fs
+    chunk = min(int(ds["chunk"]), n)
+    labels = n * 400.0                                  # label table, order, seeds, pit depths
+    memory = BASE_BYTES + chunk * T * SAMPLE_BYTES + labels
+    disk = 2 * 4.0 * n * T + labels
+    return Estimate(f"{n} items x {T:.0f} samples", memory, disk, n * T * SAMPLE_SECONDS,
+                    ("dataset.chunk", "dataset.duration_s", "dynamics.sample_rate_Hz", "dataset.count"),
+                    ("dataset.count", "dataset.duration_s", "dynamics.sample_rate_Hz"))
+
+
+def simulation_estimate(case) -> Estimate:
+    """One ``[dynamics]`` run: duration x sample rate samples (states, forces, the file)."""
+    d = case.dynamics_settings()
+    T = float(d["duration"]) * float(d["sample_rate"])
+    return Estimate(f"a simulation of {T:.0f} samples", BASE_BYTES + T * SAMPLE_BYTES, T * 8.0 * 40,
+                    T * SAMPLE_SECONDS, ("dynamics.duration_s", "dynamics.sample_rate_Hz"),
+                    ("dynamics.duration_s", "dynamics.sample_rate_Hz"))
+
+
+def _states_estimate(case, what, count, keys) -> Estimate:
+    Z = int(case.data["bearing"]["balls"])
+    b = count * Z * STATE_BYTES_PER_BALL
+    return Estimate(what, BASE_BYTES + 4 * b, b, count * 1e-4, keys, keys)
+
+
+def check_case(case, command, output=None):
+    """Refuse a run of ``command`` on ``case`` that cannot fit (:class:`InputError` naming the
+    keys); return its :class:`Estimate` (or None for a command that sizes nothing)."""
+    est = []
+    if command in ("sweep", "demo"):
+        steps = int(case.data.get("sweep", {}).get("steps", 181))
+        est.append(_states_estimate(case, f"a sweep of {steps} cage angles", steps, ("sweep.steps",)))
+    if command == "study":
+        st = case.study_settings()
+        steps = int(case.data.get("sweep", {}).get("steps", 181))
+        m = len(st[1]) if st else 1
+        est.append(_states_estimate(case, f"a study of {m} values x {steps} cage angles", m * steps,
+                                    ("study.values", "sweep.steps")))
+    if command in ("simulate", "compare", "demo") and "dynamics" in case.data:
+        est.append(simulation_estimate(case))
+    if command == "dataset" and "dataset" in case.data:
+        est.append(dataset_estimate(case))
+    problems = []
+    for e in est:
+        try:
+            e.check(case.source, output)
+        except InputError as err:
+            problems.append(str(err).split(": ", 1)[1])
+    if problems:
+        raise InputError(f"{case.source}: " + "; ".join(problems))
+    return est[-1] if est else None
+
+
+def check_output(path, flag="-o"):
+    """Refuse an output path that is an existing directory (exit 2, nothing created)."""
+    if path is not None and Path(path).is_dir():
+        raise InputError(f"{flag} {path} is a directory: give a file name, e.g. {Path(path) / 'out.h5'}")
