@@ -282,6 +282,7 @@ def build_parser():
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
+    _cluster_flags(s, "the chunks")
     s = _command(sub, "calibrate", cmd_calibrate, "fit a data set spec to your machine: background, "
                  "resonances and levels from a healthy record (and at most one fault record)",
                  positional=("healthy", "HEALTHY", "healthy record: .npz (channel, fs, rpm, units), .npy, "
@@ -298,7 +299,6 @@ def build_parser():
     s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
     s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
     s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
-    _cluster_flags(s, "the chunks")
     _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
