@@ -102,16 +102,22 @@ def arrangement_facings(name: str) -> tuple:
     key = str(name).upper()
     if key not in ARRANGEMENTS:
         import difflib
-        close = difflib.get_close_matches(key, list(ARRANGEMENTS), n=1)
+        close = difflib.get_close_matches(key, list(ARRANGEMENTS), n=1, cutoff=0.4)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise InputError(f"unknown arrangement {name!r}{hint}; known: {', '.join(ARRANGEMENTS)}")
     return ARRANGEMENTS[key]
 
 
 def frame_matrix(facing):
-    """M_k: diag(1, 1, 1, 1, 1) for s = +1, diag(1, -1, -1, 1, -1) for s = -1 (MODEL.md 10)."""
-    return jnp.diag(jnp.array([1.0, 1.0, 1.0, 1.0, 1.0]) if facing > 0
-                    else jnp.array([1.0, -1.0, -1.0, 1.0, -1.0]))
+    """M_k: diag(1, 1, 1, 1, 1) for s = +1, diag(1, -1, -1, 1, -1) for s = -1 (MODEL.md 10);
+    ``facing`` may be traced."""
+    return jnp.diag(_frame_diag(facing))
+
+
+def _frame_diag(facing):
+    s = jnp.asarray(facing, jnp.float64)
+    one = jnp.ones_like(s)
+    return jnp.stack([one, s, s, one, s], axis=-1)
 
 
 def transfer_matrix(z):
@@ -136,24 +142,25 @@ class BearingSet(eqx.Module):
     bearings: tuple
     positions: jnp.ndarray
     preload: jnp.ndarray
-    facings: tuple = eqx.field(static=True)
-    springs: tuple = eqx.field(static=True)
+    facings: jnp.ndarray        # (N,) +1.0 / -1.0 (data: sets that differ only in facings share
+    springs: tuple = eqx.field(static=True)     # one compiled program)
 
     def __init__(self, bearings, positions, facings, preload=None, springs=None):
         bearings = tuple(bearings)
         n = len(bearings)
         self.bearings = bearings
         self.positions = jnp.asarray(positions, jnp.float64).reshape(n)
-        self.facings = tuple(int(s) for s in facings)
+        facings = tuple(int(s) for s in np.asarray(facings).reshape(-1))
         self.preload = (jnp.zeros(n) if preload is None
                         else jnp.broadcast_to(jnp.asarray(preload, jnp.float64), (n,)))
         self.springs = tuple(bool(s) for s in (springs if springs is not None else (False,) * n))
-        if len(self.facings) != n or len(self.springs) != n:
+        if len(facings) != n or len(self.springs) != n:
             raise InputError(f"a set of {n} bearings needs {n} facings and {n} spring flags, got "
-                             f"{len(self.facings)} and {len(self.springs)}")
-        bad = [s for s in self.facings if s not in (1, -1)]
+                             f"{len(facings)} and {len(self.springs)}")
+        bad = [s for s in facings if s not in (1, -1)]
         if bad:
             raise InputError(f"facings must be +1 or -1, got {bad}")
+        self.facings = jnp.asarray(facings, jnp.float64)
         if n and all(self.springs):
             raise InputError("every bearing of the set has a spring preload: nothing holds the shaft "
                              "axially; give at least one bearing a rigid preload (or none)")
@@ -243,7 +250,8 @@ class _Bearing(eqx.Module):
     psi: jnp.ndarray            # own-frame azimuths (Z,)
     H_outer: jnp.ndarray
     H_inner: jnp.ndarray
-    G: jnp.ndarray              # M_k T_k (5, 5): q_k = G q_s + (e - u) e_z
+    G: jnp.ndarray              # M_k T_k (5, 5), its axial row zeroed for a spring bearing
+                                # (q_k = G q_s + (e_k + v_k) e_z; see _System)
     L: jnp.ndarray              # T_k^T M_k (5, 5): its loads on the shaft
     rs: jnp.ndarray             # reaction scales [KN, KN, KN, KN R_i, KN R_i]
     defect: bool = eqx.field(static=True)
@@ -251,11 +259,11 @@ class _Bearing(eqx.Module):
 
 def _flip(spall, facing):
     """A defect given in the shaft frame, in a bearing's own frame (azimuths flip when s = -1)."""
-    if spall is None or facing > 0:
+    if spall is None:
         return spall
     out = []
     for sp in as_defects(spall):
-        out.append(sp if sp.location == "ball" else eqx.tree_at(lambda p: p.center, sp, -sp.center))
+        out.append(sp if sp.location == "ball" else eqx.tree_at(lambda p: p.center, sp, facing * sp.center))
     return tuple(out)
 
 
@@ -339,62 +347,79 @@ def _ball_steps(bk: _Bearing, piece, jac, inv, P, dqk):
 
 
 # --------------------------------------------------------------------------- the system
+# Bearings of one structure (ball count, defect layout) form a group whose arrays are stacked on
+# a leading axis: each group's ball equations are traced once and vmapped over its bearings.
 class _System(eqx.Module):
-    bks: tuple
+    groups: tuple               # stacked _Bearing per group
+    index: tuple = eqx.field(static=True)   # bearing indices of each group
     springs: tuple = eqx.field(static=True)
     e: jnp.ndarray              # (N,) rigid offsets (m)
     P: jnp.ndarray              # (N,) preloads (N)
+    sel: jnp.ndarray            # (N, n_u) which spring unknown is bearing k's axial approach
     F: jnp.ndarray              # (5,) external loads
-    xs: jnp.ndarray             # unknown scales (5 + n_spring)
-    fs: jnp.ndarray             # residual scales (5 + n_spring)
+    xs: jnp.ndarray             # unknown scales (5 + n_u)
+    fs: jnp.ndarray             # residual scales (5 + n_u)
+
+    def take(self, a, g):
+        return a[jnp.asarray(self.index[g])]
+
+
+_EZ = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
 
 
 def _spring_index(springs):
     return [k for k, s in enumerate(springs) if s]
 
 
-def _bearing_q(sy: _System, x, k):
-    """q_k (m) from the physical unknowns x = [q_s, u_spring...]."""
-    bk = sy.bks[k]
-    idx = _spring_index(sy.springs)
-    ez = jnp.zeros(5).at[2].set(1.0)
-    shift = sy.e[k] - (x[5 + idx.index(k)] if sy.springs[k] else 0.0)
-    return bk.G @ x[:5] + shift * ez
+def _group_q(sy: _System, x, g):
+    """q_k (m) of the bearings of group g, (n_g, 5), from the physical unknowns x.
+
+    A spring bearing's unknown is its own axial approach v_k = q_k,z (its floating ring's shift
+    is u_k = (M_k T_k q_s)_z - v_k): a linear change of variables from (q_s, u) (the Newton
+    direction is the same), with which the step caps act on the approach as in jones."""
+    bk = sy.groups[g]
+    shift = sy.take(sy.e, g) + sy.take(sy.sel, g) @ x[5:]
+    return jnp.einsum("gij,j->gi", bk.G, x[:5]) + shift[:, None] * _EZ
+
+
+def _vmap_b(f, *args):
+    return jax.vmap(f)(*args)
 
 
 def _evaluate(sy: _System, op, x, Ys, Yus, jac=True):
-    pieces = [_ball_pieces(bk, op, _bearing_q(sy, x, k), Ys[k], Yus[k] if bk.defect else None, jac)
-              for k, bk in enumerate(sy.bks)]
-    return pieces
+    return [jax.vmap(lambda bk, q, y, yu: _ball_pieces(bk, op, q, y, yu if bk.defect else None, jac))(
+        bk, _group_q(sy, x, g), Ys[g], Yus[g]) for g, bk in enumerate(sy.groups)]
 
 
-def _residual(sy: _System, gs):
-    """Scaled residual of the set from each bearing's (reduced) reaction g_k."""
+def _reduced(sy: _System, gs):
+    """Scaled residual of the set from each group's (reduced) reactions g (n_g, 5)."""
     r = -sy.F
-    for bk, g in zip(sy.bks, gs):
-        r = r + bk.L @ g
-    rs = [r] + [jnp.reshape(gs[k][2] - sy.P[k], (1,)) for k in _spring_index(sy.springs)]
-    return jnp.concatenate(rs) / sy.fs
+    ru = -sy.P @ sy.sel
+    for g, (bk, gg) in enumerate(zip(sy.groups, gs)):
+        r = r + jnp.einsum("gij,gj->i", bk.L, gg)
+        ru = ru + gg[:, 2] @ sy.take(sy.sel, g)
+    return jnp.concatenate([r, ru]) / sy.fs
 
 
 def _jacobian(sy: _System, Ks):
     """d(residual)/d(unknowns), physical units."""
-    idx = _spring_index(sy.springs)
-    n = 5 + len(idx)
-    J = jnp.zeros((n, n))
-    ez = jnp.zeros(5).at[2].set(1.0)
-    for k, (bk, K) in enumerate(zip(sy.bks, Ks)):
-        J = J.at[:5, :5].add(bk.L @ K @ bk.G)
-        if sy.springs[k]:
-            j = 5 + idx.index(k)
-            J = J.at[:5, j].add(-(bk.L @ K @ ez))
-            J = J.at[j, :5].add((K @ bk.G)[2])
-            J = J.at[j, j].add(-K[2, 2])
-    return J
+    n_u = sy.sel.shape[1]
+    Jss = jnp.zeros((5, 5))
+    Jsu = jnp.zeros((5, n_u))
+    Jus = jnp.zeros((n_u, 5))
+    Juu = jnp.zeros((n_u, n_u))
+    for g, (bk, K) in enumerate(zip(sy.groups, Ks)):
+        S = sy.take(sy.sel, g)
+        KG = K @ bk.G
+        Jss = Jss + jnp.einsum("gij,gjk->ik", bk.L, KG)
+        Jsu = Jsu + jnp.einsum("gij,gj,gu->iu", bk.L, K[:, :, 2], S)
+        Jus = Jus + jnp.einsum("gu,gk->uk", S, KG[:, 2, :])
+        Juu = Juu + jnp.einsum("gu,g,gv->uv", S, K[:, 2, 2], S)
+    return jnp.concatenate([jnp.concatenate([Jss, Jsu], 1), jnp.concatenate([Jus, Juu], 1)], 0)
 
 
-def _merit(sy, pieces, gs):
-    m = jnp.max(jnp.abs(_residual(sy, [p["R"] for p in pieces])))
+def _merit(sy, pieces):
+    m = jnp.max(jnp.abs(_reduced(sy, [p["R"] for p in pieces])))
     for p in pieces:
         m = jnp.maximum(m, jnp.max(jnp.abs(p["rb"])))
         if "rbu" in p:
@@ -403,20 +428,18 @@ def _merit(sy, pieces, gs):
 
 
 def _direction(sy: _System, pieces, jacs):
-    """Newton step: (dx scaled, [dY_k], [dYu_k], physical Jacobian)."""
-    conds = [_condense(bk, p, j) for bk, p, j in zip(sy.bks, pieces, jacs)]
-    Ks = [c[0] for c in conds]
-    gs = [c[1] for c in conds]
-    J = _jacobian(sy, Ks)
+    """Newton step: (dx scaled, [dY_g], [dYu_g], physical Jacobian)."""
+    conds = [jax.vmap(_condense)(bk, p, j) for bk, p, j in zip(sy.groups, pieces, jacs)]
+    J = _jacobian(sy, [c[0] for c in conds])
     Js = J * (sy.xs[None, :] / sy.fs[:, None])
-    r = _residual(sy, gs)
+    r = _reduced(sy, [c[1] for c in conds])
     mu = 1e-13 * (jnp.max(jnp.abs(Js)) + 1e-30)
     dxs = -jnp.linalg.solve(Js + mu * jnp.eye(Js.shape[0]), r)
     dx = dxs * sy.xs
     dYs, dYus = [], []
-    for k, (bk, p, j, c) in enumerate(zip(sy.bks, pieces, jacs, conds)):
-        dqk = _bearing_q(sy, dx, k) - sy.e[k] * jnp.zeros(5).at[2].set(1.0)
-        dY, dYu = _ball_steps(bk, p, j, c[2], c[3], dqk)
+    for g, (bk, p, j, c) in enumerate(zip(sy.groups, pieces, jacs, conds)):
+        dq = _group_q(sy, dx, g) - sy.take(sy.e, g)[:, None] * _EZ
+        dY, dYu = jax.vmap(_ball_steps)(bk, p, j, c[2], c[3], dq)
         dYs.append(dY)
         dYus.append(dYu)
     return dxs, dYs, dYus, J
@@ -436,9 +459,7 @@ def _maxabs(arrs):
     return m
 
 
-def _closed_form(sy: _System, op, x, k, defect_free=False):
-    bk = sy.bks[k]
-    qk = _bearing_q(sy, x, k)
+def _closed_form_one(bk: _Bearing, op, qk, defect_free):
     A1, A2 = groove_centre_offsets(bk.bearing, qk, bk.psi)
     Ho = jnp.zeros_like(bk.psi) if defect_free else bk.H_outer
     Hi = jnp.zeros_like(bk.psi) if defect_free else bk.H_inner
@@ -447,16 +468,25 @@ def _closed_form(sy: _System, op, x, k, defect_free=False):
     return x0 / UM, d_c
 
 
+def _closed_form(sy: _System, op, x, g, defect_free=False):
+    return jax.vmap(lambda bk, q: _closed_form_one(bk, op, q, defect_free))(
+        sy.groups[g], _group_q(sy, x, g))
+
+
+def _lift(bk, y, dc, undropped):
+    return jax.vmap(lambda b, yy, d: lift_onto_outer(b.bearing, yy, d, 0.0 if undropped else b.H_outer))(
+        bk, y, dc)
+
+
 def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
     """Damped Newton on the set (jones' loop with the set's unknowns): returns
     (xz, Ys, Yus, jacs, code, iterations)."""
-    bks = sy.bks
-    caps = [_BALL_CAP * bk.bearing.ball_diameter / UM for bk in bks]
+    groups = sy.groups
+    caps = [_BALL_CAP * bk.bearing.ball_diameter[:, None, None] / UM for bk in groups]
 
     def lift(Ys, Yus):
-        Ys = [lift_onto_outer(bk.bearing, y, dc, bk.H_outer) for bk, y, dc in zip(bks, Ys, dcs)]
-        Yus = [lift_onto_outer(bk.bearing, y, dc, 0.0) if bk.defect else y
-               for bk, y, dc in zip(bks, Yus, dcus)]
+        Ys = [_lift(bk, y, dc, False) for bk, y, dc in zip(groups, Ys, dcs)]
+        Yus = [_lift(bk, y, dc, True) if bk.defect else y for bk, y, dc in zip(groups, Yus, dcus)]
         return Ys, Yus
 
     def body(c):
@@ -468,8 +498,8 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
         Ys, Yus = lift(Ys, Yus)
         x = xz * sy.xs
         pieces = _evaluate(sy, op, x, Ys, Yus)
-        jacs = [{kk: p[kk] for kk in _jac_keys(bk.defect)} for bk, p in zip(bks, pieces)]
-        m = _merit(sy, pieces, None)
+        jacs = [{kk: p[kk] for kk in _jac_keys(bk.defect)} for bk, p in zip(groups, pieces)]
+        m = _merit(sy, pieces)
         dx, dYs, dYus, _ = _direction(sy, pieces, jacs)
         sn = jnp.maximum(jnp.max(jnp.abs(dx)), jnp.maximum(_maxabs(dYs), _maxabs(dYus)))
         finite = jnp.isfinite(m) & jnp.isfinite(sn)
@@ -480,7 +510,7 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
                                 | (ss <= (1.0 - 0.25 * t) * c["sn"])))
         dYs = [_cap(d, cap) for d, cap in zip(dYs, caps)]
         dYus = [_cap(d, cap) if bk.defect else jnp.zeros_like(y)
-                for d, cap, bk, y in zip(dYus, caps, bks, Ys)]
+                for d, cap, bk, y in zip(dYus, caps, groups, Ys)]
         new = dict(xz=xz, Y=Ys, Yu=Yus, dx=_cap(dx, _RING_CAP), dY=dYs, dYu=dYus, m=m, sn=sn,
                    jac=jacs)
         out = jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, {k: c[k] for k in new})
@@ -498,7 +528,7 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
                 dY=[jnp.zeros_like(y) for y in Y0], dYu=[jnp.zeros_like(y) for y in Y0],
                 m=jnp.float64(jnp.inf), sn=jnp.float64(jnp.inf), t=jnp.float64(1.0),
                 it=jnp.int32(-1), ls=jnp.int32(0), code=jnp.int32(-1),
-                jac=[_zero_jac(bk) for bk in bks])
+                jac=[jax.vmap(_zero_jac)(bk) for bk in groups])
     c = lax.while_loop(lambda c: c["code"] < 0, body, init)
     return c["xz"], c["Y"], c["Yu"], c["jac"], c["code"], c["it"]
 
@@ -528,7 +558,7 @@ class SetSolution(eqx.Module):
     preload: jnp.ndarray
     positions: jnp.ndarray
     bearings: tuple
-    facings: tuple = eqx.field(static=True)
+    facings: jnp.ndarray
     springs: tuple = eqx.field(static=True)
 
     @property
@@ -576,8 +606,9 @@ class SetSolution(eqx.Module):
     def shaft_reactions(self):
         """(..., N, 5): each bearing's loads on the shaft at O in the shaft frame, T^T M R."""
         out = []
-        for s, z, b in zip(self.facings, jnp.moveaxis(self.positions, -1, 0), self.bearings):
-            R = b.loads * jnp.array([1.0, 1.0, 1.0, 1.0, 1.0] if s > 0 else [1.0, -1.0, -1.0, 1.0, -1.0])
+        for s, z, b in zip(jnp.moveaxis(self.facings, -1, 0), jnp.moveaxis(self.positions, -1, 0),
+                           self.bearings):
+            R = b.loads * _frame_diag(s)
             Fx, Fy, Fz, Mx, My = (R[..., i] for i in range(5))
             zz = z
             out.append(jnp.stack([Fx, Fy, Fz, Mx - zz * Fy, My + zz * Fx], axis=-1))
@@ -585,31 +616,65 @@ class SetSolution(eqx.Module):
 
     def shaft_azimuth(self, k):
         """Ball azimuths of bearing k in the shaft frame (rad)."""
-        return self.facings[k] * self.bearings[k].azimuth
+        return self.facings[..., k, None] * self.bearings[k].azimuth
 
     def message(self):
         codes = np.atleast_1d(np.asarray(self.result))
         return [RESULTS.of(c).message for c in codes]
 
 
-def _validity_set(sy, sts, psis, F, P, rtol):
+def _bearing_output(bk: _Bearing, op, qk, Y, Yu, piece, jac, cage, total_it, res, rtol):
+    """One bearing's JonesSolution (own frame) and its validity code."""
+    b = bk.bearing
+    A1, A2 = groove_centre_offsets(b, qk, bk.psi)
+    xb = Y * UM
+    ws = None
+    if bk.defect:
+        ws = jax.vmap(lambda xx, a1, a2: ball_state(b, op, xx, a1, a2, bk.curve).orbital_speed)(
+            Yu * UM, A1, A2)
+    st = jax.vmap(lambda xx, a1, a2, ho, hi, w: ball_state(b, op, xx, a1, a2, bk.curve, ho, hi, w),
+                  in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(xb, A1, A2, bk.H_outer,
+                                                                       bk.H_inner, ws)
+    R = reactions_from_balls(st, bk.psi)
+    a_i, b_i, p_i = contact_ellipse(bk.curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
+    a_o, b_o, p_o = contact_ellipse(bk.curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
+    vk = state_validity(b, op, st, bk.psi, qk, R, bk.H_outer + bk.H_inner, rtol)
+    Kk = _condense(bk, piece, jac)[0]
+    qmax = jnp.maximum(jnp.max(st.Q_inner), jnp.max(st.Q_outer))
+    return JonesSolution(qk, R, vk, total_it, res, cage, bk.psi, st.alpha_inner,
+                         st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner,
+                         st.delta_outer, st.centrifugal, st.gyroscopic_moment,
+                         st.orbital_speed, st.beta, bk.H_outer, st.ball_G, st.ball_H,
+                         st.ball_moment, st.K_inner, st.K_outer, p_i, p_o, a_i, b_i, a_o,
+                         b_o, Kk, xb, (Yu if bk.defect else Y) * UM, bk.H_inner), qmax
+
+
+def _equilibrium_bad(sy: _System, sols, qmax, F, P, rtol):
     """Shaft equilibrium (and the springs' R_z = P) recomputed from the per-ball output."""
-    r = -F
-    qmax = jnp.float64(0.0)
-    extra = []
-    for k, (bk, st, psi) in enumerate(zip(sy.bks, sts, psis)):
-        R = reactions_from_balls(st, psi)
-        r = r + bk.L @ R
-        qmax = jnp.maximum(qmax, jnp.maximum(jnp.max(st.Q_inner), jnp.max(st.Q_outer)))
-        if sy.springs[k]:
-            extra.append(R[2] - P[k])
-    w = KN / sy.fs[:5]
-    scale = jnp.maximum(jnp.max(jnp.abs(F * w)), jnp.maximum(qmax, jnp.max(jnp.abs(P)))) + 1.0
+    Rs = [s.loads for s in sols]
+    r = _reduced(sy, Rs) * sy.fs
+    w = jnp.concatenate([KN / sy.fs[:5], jnp.ones(sy.sel.shape[1])])
+    scale = jnp.maximum(jnp.max(jnp.abs(F * w[:5])), jnp.maximum(qmax, jnp.max(jnp.abs(P)))) + 1.0
     tol = jnp.maximum(1e-7, 100.0 * rtol) * scale
-    bad = jnp.max(jnp.abs(r * w)) > tol
-    for e in extra:
-        bad = bad | (jnp.abs(e) > tol)
-    return bad
+    return jnp.max(jnp.abs(r * w)) > tol
+
+
+def _groups(bset, spalls):
+    """Bearing indices grouped by structure (ball count, defect layout)."""
+    keys = {}
+    for k, b in enumerate(bset.bearings):
+        sp = spalls[k]
+        key = (b.n_balls, jax.tree_util.tree_structure(sp) if sp is not None else None)
+        keys.setdefault(key, []).append(k)
+    return tuple(tuple(v) for v in keys.values())
+
+
+def _stack(items):
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *items)
+
+
+def _split(tree, n):
+    return [jax.tree_util.tree_map(lambda a: a[i], tree) for i in range(n)]
 
 
 def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
@@ -620,7 +685,7 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     ``loads``: F_s = [Fx, Fy, Fz, Mx, My] at O (N, N m, shaft frame).  ``cage_angle``: scalar or
     (N,) (shaft frame).  ``spalls``: None or a tuple of N entries (None or defects, azimuths in
     the shaft frame).  ``offsets``: the rigid offsets e_k (m) to hold; default: from the
-    preloads at standstill (:func:`preload_offset`).  ``x0``: a warm start (q_s, u) (5 + N,)
+    preloads at standstill (:func:`preload_offset`).  ``x0``: a warm start [q_s (5), u (N)]
     at full speed (cold: the static start, then ``speed_steps`` speed stages).
     """
     N = bset.n
@@ -636,7 +701,7 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
                        for k, b in enumerate(bset.bearings)])
     else:
         e = jnp.where(jnp.asarray(springs), 0.0, jnp.asarray(offsets, jnp.float64))
-    bks, psis = [], []
+    bks = []
     for k, b in enumerate(bset.bearings):
         s = bset.facings[k]
         psi = s * b.ball_azimuths(cage[k])
@@ -647,15 +712,22 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         M = frame_matrix(s)
         T = transfer_matrix(bset.positions[k])
         Ri = b.inner_groove_radius
-        bks.append(_Bearing(b, curves[k], psi, Ho, Hi, M @ T, T.T @ M,
+        G = M @ T
+        if springs[k]:
+            G = G.at[2].set(0.0)
+        bks.append(_Bearing(b, curves[k], psi, Ho, Hi, G, T.T @ M,
                             jnp.stack([KN, KN, KN, KN * Ri, KN * Ri]), defect))
-        psis.append(psi)
+    index = _groups(bset, spalls)
+    groups = tuple(_stack([bks[k] for k in ix]) for ix in index)
     idx = _spring_index(springs)
+    sel = np.zeros((N, len(idx)))
+    for j, k in enumerate(idx):
+        sel[k, j] = 1.0
     Lr = jnp.maximum(jnp.max(jnp.stack([b.inner_groove_radius for b in bset.bearings])),
                      jnp.max(jnp.abs(bset.positions)))
     xs = jnp.concatenate([jnp.stack([UM, UM, UM, UM / Lr, UM / Lr]), jnp.full(len(idx), UM)])
     fs = jnp.concatenate([jnp.stack([KN, KN, KN, KN * Lr, KN * Lr]), jnp.full(len(idx), KN)])
-    sy = _System(tuple(bks), springs, e, P, F, xs, fs)
+    sy = _System(groups, index, springs, e, P, jnp.asarray(sel), F, xs, fs)
     load_scale = jnp.maximum(jnp.max(jnp.abs(F / fs[:5])), jnp.max(jnp.abs(P)) / KN)
     tol = jnp.asarray(atol, jnp.float64) / KN + jnp.asarray(rtol, jnp.float64) * load_scale
 
@@ -663,88 +735,79 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         return eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
 
     if x0 is None:
-        x = _static_start(sy, bset, curves, e)
+        x = _static_start(sy, bset, bks, curves, e)
         fracs = [0.0] + [k / speed_steps for k in range(1, speed_steps + 1)]
     else:
         x0 = jnp.asarray(x0, jnp.float64)
         x = jnp.concatenate([x0[:5], x0[5:][jnp.asarray(idx, jnp.int32)]]) if idx else x0[:5]
+        # the spring bearings' unknowns are their approaches (x0 holds the ring shifts u)
+        for j, k in enumerate(idx):
+            x = x.at[5 + j].set((frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k])
+                                 @ x[:5])[2] - x[5 + j])
         fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
 
-    nan = [jnp.full((b.n_balls, 2), jnp.nan) for b in bset.bearings]
+    nan = [jnp.full((len(ix), bset.bearings[ix[0]].n_balls, 2), jnp.nan) for ix in index]
 
     def stage(carry, frac):
         xz, Ys, Yus, _ = carry
         o = with_speed(frac)
         Ys2, Yus2, dcs, dcus = [], [], [], []
-        for k, bk in enumerate(sy.bks):
-            Yc, dc = _closed_form(sy, o, xz * sy.xs, k)
-            Yuc, dcu = _closed_form(sy, o, xz * sy.xs, k, True)
-            Ys2.append(lift_onto_outer(bk.bearing, jnp.where(jnp.isfinite(Ys[k]), Ys[k], Yc), dc, bk.H_outer))
-            Yus2.append(lift_onto_outer(bk.bearing, jnp.where(jnp.isfinite(Yus[k]), Yus[k], Yuc), dcu, 0.0))
+        for g, bk in enumerate(sy.groups):
+            Yc, dc = _closed_form(sy, o, xz * sy.xs, g)
+            Yuc, dcu = _closed_form(sy, o, xz * sy.xs, g, True)
+            Ys2.append(_lift(bk, jnp.where(jnp.isfinite(Ys[g]), Ys[g], Yc), dc, False))
+            Yus2.append(_lift(bk, jnp.where(jnp.isfinite(Yus[g]), Yus[g], Yuc), dcu, True))
             dcs.append(dc)
             dcus.append(dcu)
         xz, Ys, Yus, jacs, code, it = _newton(sy, o, xz, Ys2, Yus2, dcs, dcus, maxit, tol)
         return (xz, Ys, Yus, jacs), (code, it)
 
-    jac0 = [_zero_jac(bk) for bk in sy.bks]
+    jac0 = [jax.vmap(_zero_jac)(bk) for bk in sy.groups]
     (xz, Ys, Yus, jacs), (codes, its) = lax.scan(stage, (x / xs, nan, nan, jac0), jnp.asarray(fracs))
     code, total_it = codes[-1], jnp.sum(its)
     at_rest = op.speed == 0.0
-    Ys = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, k)[0], Ys[k]) for k in range(N)]
-    Yus = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, k, True)[0], Yus[k]) for k in range(N)]
+    Ys = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, g)[0], Ys[g]) for g in range(len(index))]
+    Yus = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, g, True)[0], Yus[g])
+           for g in range(len(index))]
 
     # implicit differentiation: one correction with the Jacobian frozen (jones does the same)
     xz, Ys, Yus, jacs = lax.stop_gradient((xz, Ys, Yus, jacs))
     pieces = _evaluate(sy, op, xz * xs, Ys, Yus, jac=False)
-    res = _merit(sy, pieces, None) * KN
+    res = _merit(sy, pieces) * KN
     dxs, dYs, dYus, J = _direction(sy, pieces, jacs)
     xz = xz + dxs
     Ys = [y + d for y, d in zip(Ys, dYs)]
-    Yus = [y + d if bk.defect else y for y, d, bk in zip(Yus, dYus, sy.bks)]
+    Yus = [y + d if bk.defect else y for y, d, bk in zip(Yus, dYus, sy.groups)]
     x = xz * xs
     # set stiffness: the Jacobian with the floating rings condensed out
     Kss = J[:5, :5]
     if idx:
         Kss = Kss - J[:5, 5:] @ jnp.linalg.solve(J[5:, 5:], J[5:, :5])
 
-    sols, sts = [], []
+    sols = [None] * N
+    qmax = jnp.float64(0.0)
+    for g, (bk, ix) in enumerate(zip(sy.groups, index)):
+        out, qm = jax.vmap(lambda b, q, y, yu, p, j, c: _bearing_output(
+            b, op, q, y, yu, p, j, c, total_it, res, rtol))(
+            bk, _group_q(sy, x, g), Ys[g], Yus[g], pieces[g], jacs[g], cage[jnp.asarray(ix)])
+        qmax = jnp.maximum(qmax, jnp.max(qm))
+        for i, sol in zip(ix, _split(out, len(ix))):
+            sols[i] = sol
     worst = jnp.int32(0)
-    for k, bk in enumerate(sy.bks):
-        b = bk.bearing
-        qk = _bearing_q(sy, x, k)
-        A1, A2 = groove_centre_offsets(b, qk, bk.psi)
-        xb = Ys[k] * UM
-        ws = None
-        if bk.defect:
-            ws = jax.vmap(lambda xx, a1, a2: ball_state(b, op, xx, a1, a2, bk.curve).orbital_speed)(
-                Yus[k] * UM, A1, A2)
-        st = jax.vmap(lambda xx, a1, a2, ho, hi, w: ball_state(b, op, xx, a1, a2, bk.curve, ho, hi, w),
-                      in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(xb, A1, A2, bk.H_outer,
-                                                                           bk.H_inner, ws)
-        R = reactions_from_balls(st, bk.psi)
-        a_i, b_i, p_i = contact_ellipse(bk.curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
-        a_o, b_o, p_o = contact_ellipse(bk.curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
-        vk = state_validity(b, op, st, bk.psi, qk, R, bk.H_outer + bk.H_inner, rtol)
-        Kk, _, _, _ = _condense(bk, pieces[k], jacs[k])
-        worst = jnp.where(worst == 0, vk, worst)
-        sols.append(JonesSolution(qk, R, vk, total_it, res, cage[k], bk.psi, st.alpha_inner,
-                                  st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner,
-                                  st.delta_outer, st.centrifugal, st.gyroscopic_moment,
-                                  st.orbital_speed, st.beta, bk.H_outer, st.ball_G, st.ball_H,
-                                  st.ball_moment, st.K_inner, st.K_outer, p_i, p_o, a_i, b_i, a_o,
-                                  b_o, Kk, xb, Yus[k] * UM, bk.H_inner))
-        sts.append(st)
-    eq_bad = _validity_set(sy, sts, psis, F, P, rtol)
+    for sol in sols:
+        worst = jnp.where(worst == 0, sol.result, worst)
+    eq_bad = _equilibrium_bad(sy, [_stack([sols[k] for k in ix]) for ix in index], qmax, F, P, rtol)
     valid = jnp.where(worst != 0, worst, jnp.where(eq_bad, RESULTS.equilibrium, RESULTS.successful))
     code = jnp.where(code == 0, valid, code).astype(jnp.int32)
     u = jnp.zeros(N)
     for j, k in enumerate(idx):
-        u = u.at[k].set(x[5 + j])
+        Gk = frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k])
+        u = u.at[k].set((Gk @ x[:5])[2] - x[5 + j])
     return SetSolution(x[:5], F, code, total_it, res, Kss, e, u, P, bset.positions, tuple(sols),
                        bset.facings, springs)
 
 
-def _static_start(sy: _System, bset: BearingSet, curves, e):
+def _static_start(sy: _System, bset: BearingSet, bks, curves, e):
     """Physical start x = [q_s, u]: q_s = 0 when a rigid preload holds balls in contact; else
     the displacement where every bearing's balls touch under its share of the load (shares from
     linear point springs, one per bearing, with a light tilt stiffness so that one bearing alone
@@ -753,26 +816,23 @@ def _static_start(sy: _System, bset: BearingSet, curves, e):
     F = sy.F
     Ws = [jnp.stack([1.0, 1.0, 1.0, 0.01 * b.inner_groove_radius ** 2, 0.01 * b.inner_groove_radius ** 2])
           for b in bset.bearings]
-    Klin = sum(bk.L @ (W[:, None] * bk.G) for bk, W in zip(sy.bks, Ws))
+    Klin = sum(bk.L @ (W[:, None] * bk.G) for bk, W in zip(bks, Ws))
     qlin = jnp.linalg.solve(Klin, F)
     A = jnp.zeros((5, 5))
     rhs = jnp.zeros(5)
-    for k, (bk, W, b) in enumerate(zip(sy.bks, Ws, bset.bearings)):
+    for k, (bk, W, b) in enumerate(zip(bks, Ws, bset.bearings)):
         Fk = W * (bk.G @ qlin)
         qk = initial_displacement(b, Fk, curves[k])
         Ri = b.inner_groove_radius
         V = jnp.stack([1.0, 1.0, 0.0 if sy.springs[k] else 1.0, Ri, Ri]) ** 2
-        d = qk - e[k] * jnp.zeros(5).at[2].set(1.0)
+        d = qk - e[k] * _EZ
         A = A + bk.G.T @ (V[:, None] * bk.G)
         rhs = rhs + bk.G.T @ (V * d)
     q_lsq = jnp.linalg.solve(A, rhs)
     rigid_preload = jnp.any(jnp.asarray([(not s) for s in sy.springs]) & (e > 0))
     q = jnp.where(rigid_preload, jnp.zeros(5), q_lsq)
-    us = []
-    for k in _spring_index(sy.springs):
-        b = bset.bearings[k]
-        us.append((sy.bks[k].G @ q)[2] - preload_offset(b, sy.P[k], curves[k]))
-    return jnp.concatenate([q, jnp.stack(us)]) if us else q
+    vs = [preload_offset(bset.bearings[k], sy.P[k], curves[k]) for k in _spring_index(sy.springs)]
+    return jnp.concatenate([q, jnp.stack(vs)]) if vs else q
 
 
 # ------------------------------------------------------------------------------ entry points
@@ -827,30 +887,32 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
     return sol
 
 
-def _solve_batch(bset, op, loads, cage_angle, spalls, preload, speed_steps, maxit, rtol, atol,
-                 hertz_method, offsets):
+def _solve_batch(bset, op, loads, cage_angle, spalls, preload, facings, positions, speed_steps,
+                 maxit, rtol, atol, hertz_method, offsets):
     curves = tuple(stiffness_curve(b, hertz_method) for b in bset.bearings)
 
-    def one(o, F, c, P, e):
-        s = eqx.tree_at(lambda b: b.preload, bset, P)
-        return solve_set_state(s, o, F, cage_angle=c, spalls=spalls, speed_steps=speed_steps,
+    def one(o, F, c, P, s, z, e):
+        st = eqx.tree_at(lambda b: (b.preload, b.facings, b.positions), bset, (P, s, z))
+        return solve_set_state(st, o, F, cage_angle=c, spalls=spalls, speed_steps=speed_steps,
                                maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method,
                                curves=curves, offsets=e)
 
-    return jax.vmap(one)(op, loads, cage_angle, preload, offsets)
+    return jax.vmap(one)(op, loads, cage_angle, preload, facings, positions, offsets)
 
 
 _solve_batch_jit = jit(_solve_batch)
 
 
 def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
-                    preload=None, offsets=None, speed_steps: int = 1, maxit: int = 60,
-                    rtol: float = 1e-11, atol: float = 1e-9, hertz_method: str = "exact",
-                    throw: bool = False) -> SetSolution:
+                    preload=None, facings=None, positions=None, offsets=None, speed_steps: int = 1,
+                    maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
+                    hertz_method: str = "exact", throw: bool = False) -> SetSolution:
     """vmapped set solve over n cases: ``loads`` (n, 5); ``op.speed`` scalar or (n,);
-    ``cage_angle`` scalar, (n,) or (n, N); ``preload`` None (the set's), (N,) or (n, N);
-    ``offsets`` None (from the preloads) or (n, N) rigid offsets to hold (e.g. those fixed at
-    standstill while the speed changes).  Failed items are retried once with 8 speed steps."""
+    ``cage_angle`` scalar, (n,) or (n, N); ``preload``, ``facings``, ``positions``: None (the
+    set's), (N,) or (n, N) (sets that differ in these share one compiled program; facings are
+    not checked here: +1 / -1); ``offsets`` None (from the preloads) or (n, N) rigid offsets to
+    hold (e.g. those fixed at standstill while the speed changes).  Failed items are retried
+    once with 8 speed steps."""
     loads = jnp.asarray(loads, jnp.float64)
     n, N = loads.shape[0], bset.n
     op_b = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op,
@@ -858,15 +920,21 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
                         jnp.broadcast_to(op.gyroscopic, (n,))))
     cage = jnp.asarray(cage_angle, jnp.float64)
     cage = jnp.broadcast_to(cage[..., None] if cage.ndim == 1 else cage, (n, N))
-    P = jnp.broadcast_to(bset.preload if preload is None else jnp.asarray(preload, jnp.float64), (n, N))
-    e = None if offsets is None else jnp.broadcast_to(jnp.asarray(offsets, jnp.float64), (n, N))
+
+    def per_item(v, default):
+        return jnp.broadcast_to(default if v is None else jnp.asarray(v, jnp.float64), (n, N))
+
+    P = per_item(preload, bset.preload)
+    S = per_item(facings, bset.facings)
+    Z = per_item(positions, bset.positions)
+    e = None if offsets is None else per_item(offsets, None)
     maxit, rtol, atol = _traced(maxit, rtol, atol)
 
     def run(sel, steps):
         o = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
                         (op_b.speed[sel], op_b.centrifugal[sel], op_b.gyroscopic[sel]))
-        return _solve_batch_jit(bset, o, loads[sel], cage[sel], spalls, P[sel], steps, maxit, rtol,
-                                atol, hertz_method, None if e is None else e[sel])
+        return _solve_batch_jit(bset, o, loads[sel], cage[sel], spalls, P[sel], S[sel], Z[sel],
+                                steps, maxit, rtol, atol, hertz_method, None if e is None else e[sel])
 
     sol = run(jnp.arange(n), speed_steps)
     bad = np.flatnonzero(np.asarray(sol.result) != 0)
