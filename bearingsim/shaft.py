@@ -136,14 +136,14 @@ class BearingSet(eqx.Module):
     bearing of MODEL.md 1, carries +Fz of the shaft) or -1 (mirrored); ``preload`` (N): the
     bearing's preload force P_k (N): for a rigid preload the thrust that fixes its offset e_k
     at standstill (0: a plain support), for a spring preload the constant force of its floating
-    outer ring; ``springs`` (static): True for a spring-preloaded bearing.
+    outer ring; ``springs``: True (1.0) for a spring-preloaded bearing.
     """
 
     bearings: tuple
     positions: jnp.ndarray
     preload: jnp.ndarray
-    facings: jnp.ndarray        # (N,) +1.0 / -1.0 (data: sets that differ only in facings share
-    springs: tuple = eqx.field(static=True)     # one compiled program)
+    facings: jnp.ndarray        # (N,) +1.0 / -1.0 } data: sets that differ only in these
+    springs: jnp.ndarray        # (N,) 1.0 / 0.0   } share one compiled program
 
     def __init__(self, bearings, positions, facings, preload=None, springs=None):
         bearings = tuple(bearings)
@@ -153,15 +153,16 @@ class BearingSet(eqx.Module):
         facings = tuple(int(s) for s in np.asarray(facings).reshape(-1))
         self.preload = (jnp.zeros(n) if preload is None
                         else jnp.broadcast_to(jnp.asarray(preload, jnp.float64), (n,)))
-        self.springs = tuple(bool(s) for s in (springs if springs is not None else (False,) * n))
-        if len(facings) != n or len(self.springs) != n:
+        springs = tuple(bool(s) for s in (springs if springs is not None else (False,) * n))
+        if len(facings) != n or len(springs) != n:
             raise InputError(f"a set of {n} bearings needs {n} facings and {n} spring flags, got "
-                             f"{len(facings)} and {len(self.springs)}")
+                             f"{len(facings)} and {len(springs)}")
         bad = [s for s in facings if s not in (1, -1)]
         if bad:
             raise InputError(f"facings must be +1 or -1, got {bad}")
         self.facings = jnp.asarray(facings, jnp.float64)
-        if n and all(self.springs):
+        self.springs = jnp.asarray(springs, jnp.float64)
+        if n and all(springs):
             raise InputError("every bearing of the set has a spring preload: nothing holds the shaft "
                              "axially; give at least one bearing a rigid preload (or none)")
 
@@ -352,23 +353,18 @@ def _ball_steps(bk: _Bearing, piece, jac, inv, P, dqk):
 class _System(eqx.Module):
     groups: tuple               # stacked _Bearing per group
     index: tuple = eqx.field(static=True)   # bearing indices of each group
-    springs: tuple = eqx.field(static=True)
-    e: jnp.ndarray              # (N,) rigid offsets (m)
+    sp: jnp.ndarray             # (N,) 1.0 for a spring bearing, 0.0 for a rigid one
+    e: jnp.ndarray              # (N,) rigid offsets (m; 0 for spring bearings)
     P: jnp.ndarray              # (N,) preloads (N)
-    sel: jnp.ndarray            # (N, n_u) which spring unknown is bearing k's axial approach
     F: jnp.ndarray              # (5,) external loads
-    xs: jnp.ndarray             # unknown scales (5 + n_u)
-    fs: jnp.ndarray             # residual scales (5 + n_u)
+    xs: jnp.ndarray             # unknown scales (5 + N)
+    fs: jnp.ndarray             # residual scales (5 + N)
 
     def take(self, a, g):
         return a[jnp.asarray(self.index[g])]
 
 
 _EZ = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
-
-
-def _spring_index(springs):
-    return [k for k, s in enumerate(springs) if s]
 
 
 def _group_q(sy: _System, x, g):
@@ -378,7 +374,7 @@ def _group_q(sy: _System, x, g):
     is u_k = (M_k T_k q_s)_z - v_k): a linear change of variables from (q_s, u) (the Newton
     direction is the same), with which the step caps act on the approach as in jones."""
     bk = sy.groups[g]
-    shift = sy.take(sy.e, g) + sy.take(sy.sel, g) @ x[5:]
+    shift = sy.take(sy.e, g) + sy.take(sy.sp * x[5:], g)
     return jnp.einsum("gij,j->gi", bk.G, x[:5]) + shift[:, None] * _EZ
 
 
@@ -394,27 +390,32 @@ def _evaluate(sy: _System, op, x, Ys, Yus, jac=True):
 def _reduced(sy: _System, gs):
     """Scaled residual of the set from each group's (reduced) reactions g (n_g, 5)."""
     r = -sy.F
-    ru = -sy.P @ sy.sel
+    # one more equation per bearing: R_k,z = P_k for a spring bearing (its unknown: its axial
+    # approach v_k); v_k = 0 for a rigid one (its unknown unused)
+    ru = jnp.zeros_like(sy.P)   # rigid bearings: v_k stays 0 (start 0, decoupled unit row)
     for g, (bk, gg) in enumerate(zip(sy.groups, gs)):
         r = r + jnp.einsum("gij,gj->i", bk.L, gg)
-        ru = ru + gg[:, 2] @ sy.take(sy.sel, g)
+        ix = jnp.asarray(sy.index[g])
+        ru = ru.at[ix].add(sy.sp[ix] * (gg[:, 2] - sy.P[ix]))
     return jnp.concatenate([r, ru]) / sy.fs
 
 
 def _jacobian(sy: _System, Ks):
     """d(residual)/d(unknowns), physical units."""
-    n_u = sy.sel.shape[1]
+    N = sy.sp.shape[0]
     Jss = jnp.zeros((5, 5))
-    Jsu = jnp.zeros((5, n_u))
-    Jus = jnp.zeros((n_u, 5))
-    Juu = jnp.zeros((n_u, n_u))
+    Jsu = jnp.zeros((5, N))
+    Jus = jnp.zeros((N, 5))
+    # a rigid bearing's unused unknown: residual v_k (scaled like a spring's), derivative 1
+    Juu = jnp.diag((1.0 - sy.sp) * sy.fs[5:] / sy.xs[5:])
     for g, (bk, K) in enumerate(zip(sy.groups, Ks)):
-        S = sy.take(sy.sel, g)
+        ix = jnp.asarray(sy.index[g])
+        sp = sy.sp[ix]
         KG = K @ bk.G
         Jss = Jss + jnp.einsum("gij,gjk->ik", bk.L, KG)
-        Jsu = Jsu + jnp.einsum("gij,gj,gu->iu", bk.L, K[:, :, 2], S)
-        Jus = Jus + jnp.einsum("gu,gk->uk", S, KG[:, 2, :])
-        Juu = Juu + jnp.einsum("gu,g,gv->uv", S, K[:, 2, 2], S)
+        Jsu = Jsu.at[:, ix].add(jnp.einsum("gij,gj->ig", bk.L, K[:, :, 2]) * sp)
+        Jus = Jus.at[ix, :].add(KG[:, 2, :] * sp[:, None])
+        Juu = Juu.at[ix, ix].add(K[:, 2, 2] * sp)
     return jnp.concatenate([jnp.concatenate([Jss, Jsu], 1), jnp.concatenate([Jus, Juu], 1)], 0)
 
 
@@ -559,7 +560,7 @@ class SetSolution(eqx.Module):
     positions: jnp.ndarray
     bearings: tuple
     facings: jnp.ndarray
-    springs: tuple = eqx.field(static=True)
+    springs: jnp.ndarray
 
     @property
     def converged(self):
@@ -653,7 +654,7 @@ def _equilibrium_bad(sy: _System, sols, qmax, F, P, rtol):
     """Shaft equilibrium (and the springs' R_z = P) recomputed from the per-ball output."""
     Rs = [s.loads for s in sols]
     r = _reduced(sy, Rs) * sy.fs
-    w = jnp.concatenate([KN / sy.fs[:5], jnp.ones(sy.sel.shape[1])])
+    w = jnp.concatenate([KN / sy.fs[:5], jnp.ones(sy.sp.shape[0])])
     scale = jnp.maximum(jnp.max(jnp.abs(F * w[:5])), jnp.maximum(qmax, jnp.max(jnp.abs(P)))) + 1.0
     tol = jnp.maximum(1e-7, 100.0 * rtol) * scale
     return jnp.max(jnp.abs(r * w)) > tol
@@ -695,12 +696,12 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         curves = tuple(stiffness_curve(b, hertz_method) for b in bset.bearings)
     spalls = (None,) * N if spalls is None else tuple(spalls)
     P = bset.preload
-    springs = bset.springs
+    sp = bset.springs
+    approach = jnp.stack([preload_offset(b, P[k], curves[k]) for k, b in enumerate(bset.bearings)])
     if offsets is None:
-        e = jnp.stack([jnp.float64(0.0) if springs[k] else preload_offset(b, P[k], curves[k])
-                       for k, b in enumerate(bset.bearings)])
+        e = (1.0 - sp) * approach
     else:
-        e = jnp.where(jnp.asarray(springs), 0.0, jnp.asarray(offsets, jnp.float64))
+        e = (1.0 - sp) * jnp.asarray(offsets, jnp.float64)
     bks = []
     for k, b in enumerate(bset.bearings):
         s = bset.facings[k]
@@ -712,22 +713,16 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         M = frame_matrix(s)
         T = transfer_matrix(bset.positions[k])
         Ri = b.inner_groove_radius
-        G = M @ T
-        if springs[k]:
-            G = G.at[2].set(0.0)
+        G = (M @ T).at[2].multiply(1.0 - sp[k])
         bks.append(_Bearing(b, curves[k], psi, Ho, Hi, G, T.T @ M,
                             jnp.stack([KN, KN, KN, KN * Ri, KN * Ri]), defect))
     index = _groups(bset, spalls)
     groups = tuple(_stack([bks[k] for k in ix]) for ix in index)
-    idx = _spring_index(springs)
-    sel = np.zeros((N, len(idx)))
-    for j, k in enumerate(idx):
-        sel[k, j] = 1.0
     Lr = jnp.maximum(jnp.max(jnp.stack([b.inner_groove_radius for b in bset.bearings])),
                      jnp.max(jnp.abs(bset.positions)))
-    xs = jnp.concatenate([jnp.stack([UM, UM, UM, UM / Lr, UM / Lr]), jnp.full(len(idx), UM)])
-    fs = jnp.concatenate([jnp.stack([KN, KN, KN, KN * Lr, KN * Lr]), jnp.full(len(idx), KN)])
-    sy = _System(groups, index, springs, e, P, jnp.asarray(sel), F, xs, fs)
+    xs = jnp.concatenate([jnp.stack([UM, UM, UM, UM / Lr, UM / Lr]), jnp.full(N, UM)])
+    fs = jnp.concatenate([jnp.stack([KN, KN, KN, KN * Lr, KN * Lr]), jnp.full(N, KN)])
+    sy = _System(groups, index, sp, e, P, F, xs, fs)
     load_scale = jnp.maximum(jnp.max(jnp.abs(F / fs[:5])), jnp.max(jnp.abs(P)) / KN)
     tol = jnp.asarray(atol, jnp.float64) / KN + jnp.asarray(rtol, jnp.float64) * load_scale
 
@@ -735,15 +730,14 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         return eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
 
     if x0 is None:
-        x = _static_start(sy, bset, bks, curves, e)
+        x = _static_start(sy, bset, bks, curves, e, approach)
         fracs = [0.0] + [k / speed_steps for k in range(1, speed_steps + 1)]
     else:
         x0 = jnp.asarray(x0, jnp.float64)
-        x = jnp.concatenate([x0[:5], x0[5:][jnp.asarray(idx, jnp.int32)]]) if idx else x0[:5]
         # the spring bearings' unknowns are their approaches (x0 holds the ring shifts u)
-        for j, k in enumerate(idx):
-            x = x.at[5 + j].set((frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k])
-                                 @ x[:5])[2] - x[5 + j])
+        Gz = jnp.stack([(frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k]))[2]
+                        for k in range(N)])
+        x = jnp.concatenate([x0[:5], sp * (Gz @ x0[:5] - x0[5:])])
         fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
 
     nan = [jnp.full((len(ix), bset.bearings[ix[0]].n_balls, 2), jnp.nan) for ix in index]
@@ -780,9 +774,7 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     Yus = [y + d if bk.defect else y for y, d, bk in zip(Yus, dYus, sy.groups)]
     x = xz * xs
     # set stiffness: the Jacobian with the floating rings condensed out
-    Kss = J[:5, :5]
-    if idx:
-        Kss = Kss - J[:5, 5:] @ jnp.linalg.solve(J[5:, 5:], J[5:, :5])
+    Kss = J[:5, :5] - J[:5, 5:] @ jnp.linalg.solve(J[5:, 5:], J[5:, :5])
 
     sols = [None] * N
     qmax = jnp.float64(0.0)
@@ -799,15 +791,14 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     eq_bad = _equilibrium_bad(sy, [_stack([sols[k] for k in ix]) for ix in index], qmax, F, P, rtol)
     valid = jnp.where(worst != 0, worst, jnp.where(eq_bad, RESULTS.equilibrium, RESULTS.successful))
     code = jnp.where(code == 0, valid, code).astype(jnp.int32)
-    u = jnp.zeros(N)
-    for j, k in enumerate(idx):
-        Gk = frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k])
-        u = u.at[k].set((Gk @ x[:5])[2] - x[5 + j])
+    Gz = jnp.stack([(frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k]))[2]
+                    for k in range(N)])
+    u = sp * (Gz @ x[:5] - x[5:])
     return SetSolution(x[:5], F, code, total_it, res, Kss, e, u, P, bset.positions, tuple(sols),
-                       bset.facings, springs)
+                       bset.facings, sp)
 
 
-def _static_start(sy: _System, bset: BearingSet, bks, curves, e):
+def _static_start(sy: _System, bset: BearingSet, bks, curves, e, approach):
     """Physical start x = [q_s, u]: q_s = 0 when a rigid preload holds balls in contact; else
     the displacement where every bearing's balls touch under its share of the load (shares from
     linear point springs, one per bearing, with a light tilt stiffness so that one bearing alone
@@ -824,15 +815,14 @@ def _static_start(sy: _System, bset: BearingSet, bks, curves, e):
         Fk = W * (bk.G @ qlin)
         qk = initial_displacement(b, Fk, curves[k])
         Ri = b.inner_groove_radius
-        V = jnp.stack([1.0, 1.0, 0.0 if sy.springs[k] else 1.0, Ri, Ri]) ** 2
+        V = jnp.stack([1.0, 1.0, 1.0 - sy.sp[k], Ri, Ri]) ** 2
         d = qk - e[k] * _EZ
         A = A + bk.G.T @ (V[:, None] * bk.G)
         rhs = rhs + bk.G.T @ (V * d)
     q_lsq = jnp.linalg.solve(A, rhs)
-    rigid_preload = jnp.any(jnp.asarray([(not s) for s in sy.springs]) & (e > 0))
+    rigid_preload = jnp.any(e > 0)
     q = jnp.where(rigid_preload, jnp.zeros(5), q_lsq)
-    vs = [preload_offset(bset.bearings[k], sy.P[k], curves[k]) for k in _spring_index(sy.springs)]
-    return jnp.concatenate([q, jnp.stack(vs)]) if vs else q
+    return jnp.concatenate([q, sy.sp * approach])
 
 
 # ------------------------------------------------------------------------------ entry points
@@ -887,30 +877,31 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
     return sol
 
 
-def _solve_batch(bset, op, loads, cage_angle, spalls, preload, facings, positions, speed_steps,
-                 maxit, rtol, atol, hertz_method, offsets):
+def _solve_batch(bset, op, loads, cage_angle, spalls, preload, facings, positions, springs,
+                 speed_steps, maxit, rtol, atol, hertz_method, offsets):
     curves = tuple(stiffness_curve(b, hertz_method) for b in bset.bearings)
 
-    def one(o, F, c, P, s, z, e):
-        st = eqx.tree_at(lambda b: (b.preload, b.facings, b.positions), bset, (P, s, z))
+    def one(o, F, c, P, s, z, sp, e):
+        st = eqx.tree_at(lambda b: (b.preload, b.facings, b.positions, b.springs), bset, (P, s, z, sp))
         return solve_set_state(st, o, F, cage_angle=c, spalls=spalls, speed_steps=speed_steps,
                                maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method,
                                curves=curves, offsets=e)
 
-    return jax.vmap(one)(op, loads, cage_angle, preload, facings, positions, offsets)
+    return jax.vmap(one)(op, loads, cage_angle, preload, facings, positions, springs, offsets)
 
 
 _solve_batch_jit = jit(_solve_batch)
 
 
 def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
-                    preload=None, facings=None, positions=None, offsets=None, speed_steps: int = 1,
+                    preload=None, facings=None, positions=None, springs=None, offsets=None,
+                    speed_steps: int = 1,
                     maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
                     hertz_method: str = "exact", throw: bool = False) -> SetSolution:
     """vmapped set solve over n cases: ``loads`` (n, 5); ``op.speed`` scalar or (n,);
-    ``cage_angle`` scalar, (n,) or (n, N); ``preload``, ``facings``, ``positions``: None (the
-    set's), (N,) or (n, N) (sets that differ in these share one compiled program; facings are
-    not checked here: +1 / -1); ``offsets`` None (from the preloads) or (n, N) rigid offsets to
+    ``cage_angle`` scalar, (n,) or (n, N); ``preload``, ``facings``, ``positions``, ``springs``:
+    None (the set's), (N,) or (n, N) (sets that differ in these share one compiled program; not
+    checked here: facings +1 / -1, springs 1 / 0, not all springs); ``offsets`` None (from the preloads) or (n, N) rigid offsets to
     hold (e.g. those fixed at standstill while the speed changes).  Failed items are retried
     once with 8 speed steps."""
     loads = jnp.asarray(loads, jnp.float64)
@@ -927,6 +918,7 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     P = per_item(preload, bset.preload)
     S = per_item(facings, bset.facings)
     Z = per_item(positions, bset.positions)
+    SP = per_item(springs, bset.springs)
     e = None if offsets is None else per_item(offsets, None)
     maxit, rtol, atol = _traced(maxit, rtol, atol)
 
@@ -934,7 +926,7 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         o = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
                         (op_b.speed[sel], op_b.centrifugal[sel], op_b.gyroscopic[sel]))
         return _solve_batch_jit(bset, o, loads[sel], cage[sel], spalls, P[sel], S[sel], Z[sel],
-                                steps, maxit, rtol, atol, hertz_method, None if e is None else e[sel])
+                                SP[sel], steps, maxit, rtol, atol, hertz_method, None if e is None else e[sel])
 
     sol = run(jnp.arange(n), speed_steps)
     bad = np.flatnonzero(np.asarray(sol.result) != 0)

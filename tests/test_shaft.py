@@ -37,30 +37,40 @@ def single(b218):
     return dict(sol=sol, e=e, F2e=F2e, loads=loads)
 
 
+ROTOR = dict(z=(0.0, 0.3), zF=0.1, W=4000.0)
+
+
 @pytest.fixture(scope="module")
 def pairs(b218, single):
-    """One program, every rigid pair of the 218 (items: see ``cases``)."""
+    """One program, every pair of the 218 (items: see ``cases``)."""
     F2e = single["F2e"]
     base = shaft.BearingSet([b218, b218], [0.0, SPACING], [1, -1], [P, P])
     tilt = [0, 0, 0, 30.0, 0]
-    cases = {                                         # (facings, preload, loads, rpm)
-        "db0": ((1, -1), P, [0, 0, 0, 0, 0], 0.0),
-        "db_fz": ((1, -1), P, [0, 0, 1500.0, 0, 0], 0.0),
-        "db_below": ((1, -1), P, [0, 0, 0.99 * F2e, 0, 0], 0.0),
-        "db_lift": ((1, -1), P, [0, 0, F2e, 0, 0], 0.0),
-        "db_above": ((1, -1), P, [0, 0, 1.02 * F2e, 0, 0], 0.0),
-        "db_speed": ((1, -1), P, [0, 0, 0, 0, 0], 12000.0),
-        "db_speed_fz": ((1, -1), P, [500.0, 0, 1500.0, 0, 0], 12000.0),
-        "db_tilt": ((1, -1), P, tilt, 0.0),
-        "df_tilt": ((-1, 1), P, tilt, 0.0),
-        "dt": ((1, 1), 0.0, [0, 0, 5000.0, 0, 0], 6000.0),
+    db, z0, rigid = (1, -1), (0.0, SPACING), (0, 0)
+    W, zF = ROTOR["W"], ROTOR["zF"]
+    cases = {                                   # (facings, preload, loads, rpm, positions, springs)
+        "db0": (db, P, [0, 0, 0, 0, 0], 0.0, z0, rigid),
+        "db_fz": (db, P, [0, 0, 1500.0, 0, 0], 0.0, z0, rigid),
+        "db_below": (db, P, [0, 0, 0.99 * F2e, 0, 0], 0.0, z0, rigid),
+        "db_lift": (db, P, [0, 0, F2e, 0, 0], 0.0, z0, rigid),
+        "db_above": (db, P, [0, 0, 1.02 * F2e, 0, 0], 0.0, z0, rigid),
+        "db_speed": (db, P, [0, 0, 0, 0, 0], 12000.0, z0, rigid),
+        "db_speed_fz": (db, P, [500.0, 0, 1500.0, 0, 0], 12000.0, z0, rigid),
+        "db_tilt": (db, P, tilt, 0.0, z0, rigid),
+        "df_tilt": ((-1, 1), P, tilt, 0.0, z0, rigid),
+        "dt": ((1, 1), 0.0, [0, 0, 5000.0, 0, 0], 6000.0, z0, rigid),
+        "spring0": (db, P, [0, 0, 0, 0, 0], 0.0, z0, (0, 1)),
+        "spring6": (db, P, [0, 0, 0, 0, 0], 6000.0, z0, (0, 1)),
+        "spring12": (db, P, [0, 0, 0, 0, 0], 12000.0, z0, (0, 1)),
+        # two supports 0.3 m apart, a radial load W at zF (expressed at O: Fx = W, My = zF W)
+        "rotor": (db, 200.0, [W, 0, 0, 0, zF * W], 3000.0, ROTOR["z"], rigid),
     }
     names = list(cases)
-    fac = jnp.array([cases[k][0] for k in names], jnp.float64)
+    col = lambda i: jnp.array([cases[k][i] for k in names], jnp.float64)
     pre = jnp.array([[cases[k][1]] * 2 for k in names])
-    loads = jnp.array([cases[k][2] for k in names], jnp.float64)
-    op = bs.Operation.from_rpm(jnp.array([cases[k][3] for k in names]))
-    sol = shaft.solve_set_batch(base, op, loads, facings=fac, preload=pre)
+    op = bs.Operation.from_rpm(col(3))
+    sol = shaft.solve_set_batch(base, op, col(2), facings=col(0), preload=pre, positions=col(4),
+                                springs=col(5))
     assert np.all(np.asarray(sol.result) == 0), sol.message()
     return {k: _item(sol, i) for i, k in enumerate(names)}
 
@@ -162,37 +172,33 @@ def test_db_tilt_stiffer_than_df_and_tandem_shares(pairs):
     np.testing.assert_allclose(dt.axial_load, [2500.0, 2500.0], rtol=1e-10)
 
 
-def test_spring_preload_constant_at_every_speed(b218, single):
+def test_spring_preload_constant_at_every_speed(pairs, single):
     """A spring-preloaded bearing carries P at every speed; the set's axial stiffness is then the
     rigid bearing's alone (the floating ring adds none): K_zz of one bearing at P at rest."""
-    bset = shaft.BearingSet([b218, b218], [0.0, SPACING], [1, -1], [P, P], springs=[False, True])
-    speeds = jnp.array([0.0, 6000.0, 12000.0])
-    sol = shaft.solve_set_batch(bset, bs.Operation.from_rpm(speeds), jnp.zeros((3, 5)))
-    assert np.all(np.asarray(sol.result) == 0), sol.message()
-    np.testing.assert_allclose(sol.axial_load, P, rtol=1e-10)
-    np.testing.assert_allclose(sol.stiffness[0, 2, 2], single["sol"].stiffness[1, 2, 2], rtol=1e-9)
-    assert np.all(np.diff(np.asarray(sol.spring_shift[:, 1])) != 0.0)      # the ring floats
+    for k in ("spring0", "spring6", "spring12"):
+        np.testing.assert_allclose(pairs[k].axial_load, [P, P], rtol=1e-10)
+    np.testing.assert_allclose(pairs["spring0"].stiffness[2, 2], single["sol"].stiffness[1, 2, 2], rtol=1e-9)
+    u = [float(pairs[k].spring_shift[1]) for k in ("spring0", "spring6", "spring12")]
+    # u is measured from the touching position (e_k = 0 for a spring bearing): -e at rest
+    np.testing.assert_allclose(u[0], -single["e"], rtol=1e-9)
+    assert u[2] > u[1] > 1e-5             # the ring floats out as speed rises
+    assert float(pairs["spring0"].spring_shift[0]) == 0.0
 
 
-def test_two_supports_lever_rule():
-    """Two deep-groove supports 0.3 m apart, a radial load between them: the radial reactions
-    obey statics including the bearings' own (small) moments; neglecting the moments gives the
-    lever rule to within those moments."""
-    b1 = bs.Bearing.from_clearance(9, 7.94e-3, 39.04e-3, 0.52, 0.52, 10e-6)
-    b2 = bs.Bearing.from_clearance(8, 6.746e-3, 28.5e-3, 0.52, 0.52, 10e-6)
-    z1, z2, zF, W = 0.0, 0.3, 0.1, 400.0
-    bset = shaft.BearingSet([b1, b2], [z1, z2], [1, 1])
-    # the load at zF expressed at O: Fx = W, My = zF W
-    F = jnp.array([W, 0.0, 0.0, 0.0, zF * W])
-    sol = shaft.solve_set(bset, bs.Operation.from_rpm(1800.0), F)
-    R = np.asarray(sol.shaft_reactions())
-    own_My = np.array([float(sol.bearings[k].loads[4]) for k in range(2)])
-    # statics: sum Fx = W; moments about bearing 1: R2 (z2 - z1) + sum M_own = W (zF - z1)
+def test_two_supports_lever_rule(pairs):
+    """Two supports 0.3 m apart, a radial load between them: the radial reactions obey statics
+    including the bearings' own (small) moments; neglecting those (bearings that carry no moment)
+    gives the lever rule, to within the moments they do carry."""
+    s = pairs["rotor"]
+    (z1, z2), zF, W = ROTOR["z"], ROTOR["zF"], ROTOR["W"]
+    R = np.asarray(s.shaft_reactions())
+    own_My = np.array([float(s.bearings[0].loads[4]), -float(s.bearings[1].loads[4])])  # shaft frame
     np.testing.assert_allclose(R[:, 0].sum(), W, rtol=1e-10)
     np.testing.assert_allclose(R[1, 0] * (z2 - z1) + own_My.sum(), W * (zF - z1), rtol=1e-9)
+    # the lever rule, corrected by exactly the moments the (angular contact) supports carry
     lever = np.array([W * (z2 - zF), W * (zF - z1)]) / (z2 - z1)
-    assert np.max(np.abs(own_My)) < 0.01 * W * (z2 - z1)
-    np.testing.assert_allclose(R[:, 0], lever, rtol=0, atol=np.abs(own_My).sum() / (z2 - z1) * 1.001)
+    m = own_My.sum() / (z2 - z1)
+    np.testing.assert_allclose(R[:, 0], lever + np.array([m, -m]), rtol=1e-9)
 
 
 def test_set_input_checks(b218):
