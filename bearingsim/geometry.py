@@ -14,6 +14,37 @@ def _f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
 
 
+def _opt_f64(x):
+    return None if x is None else jnp.asarray(x, dtype=jnp.float64)
+
+
+#: bearing designs: "deep_groove" (full shoulders on both sides of both rings), "angular_contact"
+#: (one high and one low shoulder on each ring; axial load in +z only), "auto" (angular contact
+#: when the free contact angle alpha_0 > 0, else deep groove)
+DESIGNS = ("auto", "deep_groove", "angular_contact")
+#: catalogue-typical land heights (shoulder height above the groove bottom, in ball diameters) that
+#: give the default shoulder angles (estimates, docs/physics.md "Shoulders"): a deep-groove ring's
+#: lands stand ~0.2 D above the groove bottom (e.g. the 6205's inner-ring shoulder, ~34.4 mm over a
+#: 31.1 mm groove bottom: 0.21 D), edge angle ~52 deg; an angular contact ring's high shoulder
+#: ~0.38 D (edge ~74 deg: it holds a 40 deg contact and its ellipse up to the static rating, and
+#: the Harris 218's inner contacts at 10 krpm, 71 deg; contacts beyond ~75 deg are over it), its
+#: low shoulder only ~0.01 D (edge ~11 deg: the balls are snapped in over it, so the land may stand
+#: only the snap-in interference above the ball's outermost point, ~0.005 D below the groove bottom)
+LAND_HEIGHTS = {"deep_groove": (0.20, 0.20), "angular_contact": (0.38, 0.01)}
+
+
+def shoulder_angle(land_height, f):
+    """Groove-edge angle (rad) of a land ``land_height`` (in ball diameters) above the groove
+    bottom of a groove of curvature ratio f = r/D, measured at the groove's curvature centre from
+    the groove bottom: land_height = f (1 - cos theta)."""
+    return jnp.arccos(jnp.clip(1.0 - land_height / f, -1.0, 1.0))
+
+
+def land_height(angle, f):
+    """Inverse of :func:`shoulder_angle`: the land height (in ball diameters) of an edge angle."""
+    return f * (1.0 - jnp.cos(angle))
+
+
 class Material(eqx.Module):
     """Isotropic elastic material: Young's modulus (Pa), Poisson ratio, density (kg/m^3)."""
 
@@ -35,6 +66,14 @@ class Bearing(eqx.Module):
     groove curvature ratios f_i = r_i/D, f_o = r_o/D (> 0.5), and the free
     contact angle alpha_0 in rad.  Use :meth:`from_clearance` to give the
     diametral clearance P_d instead (cos alpha_0 = 1 - P_d/(2BD)).
+
+    Shoulders (MODEL.md 11; docs/physics.md "Shoulders"): each ring's groove spans contact angles
+    from -theta_low to +theta_high, measured at its curvature centre from the groove bottom,
+    positive on the side of the bearing's contact direction (outer ring +z, inner ring -z).
+    ``shoulder_angles`` = [inner high, inner low, outer high, outer low] (rad) or None for the
+    defaults of ``design`` (:data:`LAND_HEIGHTS`).  ``design`` (static): "auto" (angular contact
+    when alpha_0 > 0), "deep_groove" (the default of :meth:`from_clearance`) or
+    "angular_contact" (one low shoulder per ring: axial load in +z only).
     """
 
     n_balls: int = eqx.field(static=True)
@@ -45,16 +84,51 @@ class Bearing(eqx.Module):
     free_contact_angle: jnp.ndarray = eqx.field(converter=_f64)
     ball_material: Material = STEEL
     ring_material: Material = STEEL
+    shoulder_angles: jnp.ndarray | None = eqx.field(default=None, converter=_opt_f64)
+    design: str = eqx.field(static=True, default="auto")
+
+    def __check_init__(self):
+        if self.design not in DESIGNS:
+            raise ValueError(f"design must be one of {DESIGNS}, got {self.design!r}")
+        if self.shoulder_angles is not None and self.shoulder_angles.shape[-1:] != (4,):
+            raise ValueError("shoulder_angles must be [inner high, inner low, outer high, outer low] (rad)")
 
     @classmethod
     def from_clearance(cls, n_balls, ball_diameter, pitch_diameter, f_inner, f_outer,
-                       diametral_clearance, ball_material=STEEL, ring_material=STEEL):
-        """Bearing from its diametral clearance P_d (m): cos alpha_0 = 1 - P_d / (2 B D)."""
+                       diametral_clearance, ball_material=STEEL, ring_material=STEEL,
+                       shoulder_angles=None, design="deep_groove"):
+        """Bearing from its diametral clearance P_d (m): cos alpha_0 = 1 - P_d / (2 B D).  A
+        bearing given by its clearance is a deep-groove bearing unless ``design`` says otherwise."""
         B = f_inner + f_outer - 1.0
         c = 1.0 - diametral_clearance / (2.0 * B * ball_diameter)
         alpha0 = jnp.arccos(jnp.clip(c, -1.0, 1.0))
         return cls(n_balls, ball_diameter, pitch_diameter, f_inner, f_outer, alpha0,
-                   ball_material, ring_material)
+                   ball_material, ring_material, shoulder_angles, design)
+
+    # -- shoulders -----------------------------------------------------------------------
+    @property
+    def angular_contact(self):
+        """True (a traced bool for "auto") when the bearing has low shoulders: it carries axial
+        load in +z only."""
+        if self.design == "auto":
+            return self.free_contact_angle > 0.0
+        return jnp.asarray(self.design == "angular_contact")
+
+    @property
+    def shoulders(self):
+        """Groove-edge angles [inner high, inner low, outer high, outer low] (rad): the given
+        ``shoulder_angles`` or the design's defaults (:data:`LAND_HEIGHTS`)."""
+        if self.shoulder_angles is not None:
+            return self.shoulder_angles
+
+        def angles(kind):
+            hi, lo = LAND_HEIGHTS[kind]
+            return jnp.stack([shoulder_angle(hi, self.f_inner), shoulder_angle(lo, self.f_inner),
+                              shoulder_angle(hi, self.f_outer), shoulder_angle(lo, self.f_outer)])
+
+        if self.design == "auto":
+            return jnp.where(self.angular_contact, angles("angular_contact"), angles("deep_groove"))
+        return angles(self.design)
 
     # -- derived quantities (MODEL.md section 2) ---------------------------------
     @property

@@ -99,6 +99,19 @@ class RESULTS(ResultCode):
     beyond_bounds = (6, "contact deformation beyond 1 % of the ball diameter, or ring displacement "
                      "beyond the clearance: outside what Hertz theory and the steel can carry",
                      "the loads exceed the bearing's capacity by far; check their units (N, N m)")
+    low_shoulder = (7, "the load pushes the balls of an angular contact bearing against its low shoulders "
+                    "(axial load against the contact direction: a ball carries axial load in -z, or a "
+                    "contact lies beyond a low shoulder)",
+                    "a single angular contact bearing carries axial load in one direction only (+Fz, its "
+                    "contact direction); for a negative or reversing axial load use a preloaded pair "
+                    "(DB back-to-back or DF face-to-face), or turn the bearing round (Fz > 0)")
+    over_shoulder = (8, "a loaded contact lies beyond the edge of its groove (contact angle above the "
+                     "shoulder angle): the ball rides on the shoulder edge, outside the model",
+                     "the axial load is too large for this groove: reduce it, or use a bearing with a "
+                     "larger contact angle or higher shoulders (check the [shoulders] angles of the case)")
+    no_load = (9, "no load on the inner ring at speed: the balls ride on the outer raceway under their "
+               "centrifugal force alone, nothing drives them and the ring's position is undetermined",
+               "give a load; at rest zero load is the unloaded bearing (q = 0, no ball load)")
 
 
 def load_vector(axial=0.0, radial_x=0.0, radial_y=0.0, moment_x=0.0, moment_y=0.0):
@@ -432,10 +445,17 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
     ball_bad = jnp.max(jnp.maximum(jnp.abs(r1), jnp.abs(r2))) > tol
     ring_bad = jnp.max(jnp.abs((R - F) * w)) > tol
     inverted = jnp.any(((st.Q_inner > 0.0) & (ci <= 0.0)) | ((st.Q_outer > 0.0) & (co <= 0.0)))
+    # an angular contact bearing (low shoulders, MODEL.md 11) carries axial load in +z only: no
+    # inner contact may push its ball to -z (the geometric shoulder checks, contact centres and
+    # ellipses against the groove edges, are bearingsim.limits: flags, refused by the workflows)
+    reversed_ball = jnp.any((st.Q_inner > 0.0) & (st.Q_inner * si < -tol))
+    low_shoulder = bearing.angular_contact & (reversed_ball | (F[2] < 0.0))
     d_lim = DEFORMATION_LIMIT * D
     deform = jnp.maximum(jnp.where(st.Q_inner > 0.0, st.delta_inner, 0.0),
                          jnp.where(st.Q_outer > 0.0, st.delta_outer, 0.0))
-    room = bearing.A + jnp.max(H_total) + 2.0 * d_lim
+    # the inner groove centre can travel across the whole clearance (contact on the far side of a
+    # deep groove: |A1|, |A2| up to 2A), plus the deformations and a defect's depth
+    room = 2.0 * bearing.A + jnp.max(H_total) + 2.0 * d_lim
     ring = jnp.maximum(jnp.hypot(q[0], q[1]), jnp.abs(q[2]))
     ring = jnp.maximum(ring, 0.5 * bearing.pitch_diameter * jnp.hypot(q[3], q[4]))
     bounds = (jnp.max(deform) > d_lim) | (ring > room)
@@ -444,8 +464,17 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
         jnp.isfinite(st.alpha_outer))
     return jnp.where(~finite, RESULTS.nonfinite, jnp.where(
         inverted, RESULTS.inverted_contact, jnp.where(
-            bounds, RESULTS.beyond_bounds, jnp.where(
-                ball_bad | ring_bad, RESULTS.equilibrium, RESULTS.successful)))).astype(jnp.int32)
+            low_shoulder, RESULTS.low_shoulder, jnp.where(
+                bounds, RESULTS.beyond_bounds, jnp.where(
+                    ball_bad | ring_bad, RESULTS.equilibrium, RESULTS.successful))))).astype(jnp.int32)
+
+
+def _load_cause(bearing, op, F, code):
+    """The cause that the loads alone name, whatever the Newton iteration did: no load at speed
+    (9), a negative axial load on an angular contact bearing (7); else ``code``."""
+    no_load = jnp.all(F == 0.0) & (op.speed > 0.0)
+    reverse = bearing.angular_contact & (F[2] < 0.0)
+    return jnp.where(no_load, RESULTS.no_load, jnp.where(reverse, RESULTS.low_shoulder, code))
 
 
 def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,
@@ -531,7 +560,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
     valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
-    code = jnp.where(code == 0, valid, code).astype(jnp.int32)
+    code = _load_cause(bearing, op, F, jnp.where(code == 0, valid, code)).astype(jnp.int32)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
@@ -573,9 +602,16 @@ def raise_for(sol: JonesSolution, what: str = "Jones solve"):
     res = float(np.ravel(np.asarray(sol.residual_norm))[k])
     it = int(np.ravel(np.asarray(sol.iterations))[k])
     where = f" (item {k}; {bad.size} of {codes.size} failed)" if codes.size > 1 else ""
-    cls = InvalidStateError if r in (RESULTS.inverted_contact, RESULTS.equilibrium,
-                                     RESULTS.beyond_bounds) else NotConvergedError
-    raise cls(f"{what} failed{where}: {r.message} (after {it} iterations, residual {res:.3g} N)",
+    cls = InvalidStateError if r in (RESULTS.inverted_contact, RESULTS.equilibrium, RESULTS.beyond_bounds,
+                                     RESULTS.low_shoulder, RESULTS.over_shoulder,
+                                     RESULTS.no_load) else NotConvergedError
+    loads = ""
+    if r in (RESULTS.low_shoulder, RESULTS.over_shoulder, RESULTS.no_load, RESULTS.beyond_bounds):
+        Fs = np.reshape(np.asarray(sol.loads), (-1, 5))
+        F = Fs[min(k, len(Fs) - 1)]
+        loads = ("; loads: axial Fz = {:.6g} N, radial Fx = {:.6g} N, Fy = {:.6g} N, moments Mx = {:.6g} N m, "
+                 "My = {:.6g} N m").format(F[2], F[0], F[1], F[3], F[4])
+    raise cls(f"{what} failed{where}: {r.message}{loads} (after {it} iterations, residual {res:.3g} N)",
               r.hint, r)
 
 
@@ -610,12 +646,24 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
     if int(sol.result) != 0 and (speed_steps < 8 or q0 is not None):
         retry = _solve_jit(bearing, op, loads, speed_steps=8, **kw)
-        if int(retry.result) == 0:
+        if bool(_better(retry.result, sol.result)):
             sol = retry
     if throw:
         raise_for(sol)
     _warn_overload(sol)
     return sol
+
+
+#: Newton failures: the iteration did not end on a state (the other codes judge a state it ended on)
+_NEWTON_FAILURES = (RESULTS.max_iterations, RESULTS.nonfinite, RESULTS.stagnated)
+
+
+def _better(retry, first):
+    """Take the retry when it converged, or when it reached a state whose validity check names the
+    cause (a shoulder, the bounds...) where the first attempt's Newton iteration failed."""
+    retry, first = np.asarray(retry), np.asarray(first)
+    newton = lambda c: np.isin(c, [int(r) for r in _NEWTON_FAILURES])
+    return jnp.asarray((retry == 0) | (newton(first) & ~newton(retry)))
 
 
 def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol, atol, hertz_method):
@@ -662,7 +710,7 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
         retry = _solve_batch_jit(bearing, op_r, loads[pidx], cage[pidx], spall, 8, maxit, rtol, atol,
                                  hertz_method)
         retry = jax.tree_util.tree_map(lambda r: r[:bad.size], retry)
-        take = jnp.asarray(np.asarray(retry.result) == 0)
+        take = _better(retry.result, sol.result[idx])
 
         def merge(a, r):
             m = take.reshape(take.shape + (1,) * (r.ndim - 1))
