@@ -639,9 +639,12 @@ def _bearing_output(bk: _Bearing, op, qk, Y, Yu, piece, jac, cage, total_it, res
     R = reactions_from_balls(st, bk.psi)
     a_i, b_i, p_i = contact_ellipse(bk.curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(bk.curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
-    vk = state_validity(b, op, st, bk.psi, qk, R, bk.H_outer + bk.H_inner, rtol)
-    Kk = _condense(bk, piece, jac)[0]
     qmax = jnp.maximum(jnp.max(st.Q_inner), jnp.max(st.Q_outer))
+    # the loads it carries; an axial load at round-off level (a bearing at lift-off) is zero,
+    # not a (refused) reverse load
+    Rv = R.at[2].set(jnp.where(jnp.abs(R[2]) <= 1e-9 * (qmax + 1.0), 0.0, R[2]))
+    vk = state_validity(b, op, st, bk.psi, qk, Rv, bk.H_outer + bk.H_inner, rtol)
+    Kk = _condense(bk, piece, jac)[0]
     return JonesSolution(qk, R, vk, total_it, res, cage, bk.psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner,
                          st.delta_outer, st.centrifugal, st.gyroscopic_moment,
