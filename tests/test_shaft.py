@@ -213,3 +213,28 @@ def test_set_input_checks(b218):
     s = shaft.BearingSet.arrangement("TBT", b218, SPACING, 3000.0)
     np.testing.assert_allclose(s.preload, [1500.0, 1500.0, 3000.0])
     s.check_balance()
+
+
+def test_defect_in_one_bearing_swept_over_the_cage_angle(b218):
+    """An outer-raceway spall in bearing 1 of a DB pair under a radial load, swept over one ball
+    pitch of bearing 1's cage: when a loaded ball of bearing 1 drops into the spall, bearing 1
+    carries less of the radial load and bearing 2 (healthy) takes it up; the shaft's equilibrium
+    holds at every angle, and the healthy set is recovered away from the spall.  The spall's
+    centre is given in the shaft frame (psi = 0, the most loaded azimuth of both bearings)."""
+    from bearingsim.defect import Spall
+    bset = shaft.BearingSet([b218, b218], [0.0, SPACING], [1, -1], [P, P])
+    spall = Spall(0.0, np.deg2rad(12.0), 0.3e-3, "ball-path")
+    Z = b218.n_balls
+    th = np.linspace(-np.pi / Z, np.pi / Z, 9)
+    n = th.size
+    F = jnp.array([6000.0, 0.0, 0.0, 0.0, 0.0])
+    sol = shaft.solve_set_batch(bset, bs.Operation.from_rpm(3000.0), jnp.tile(F, (n, 1)),
+                                cage_angle=jnp.stack([th, np.zeros(n)], axis=1), spalls=(spall, None))
+    assert np.all(np.asarray(sol.result) == 0), sol.message()
+    R = np.asarray(sol.shaft_reactions())                     # (n, 2, 5)
+    np.testing.assert_allclose(R.sum(axis=1)[:, 0], 6000.0, rtol=1e-9)
+    share1 = R[:, 0, 0]
+    mid = n // 2                                              # ball 0 of bearing 1 over the spall centre
+    assert share1[mid] < share1[0] - 5.0 and share1[mid] < share1[-1] - 5.0    # ~20 N of ~3.8 kN
+    assert R[mid, 1, 0] > R[0, 1, 0] + 5.0                     # the partner takes it up
+    assert float(sol.bearings[0].Q_outer[mid, 0]) < 0.5 * float(sol.bearings[1].Q_outer[mid, 0])
