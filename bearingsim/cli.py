@@ -41,11 +41,29 @@ def _plot_dir(path):
 
 # ------------------------------------------------------------------------------- commands
 def cmd_info(args):
-    print(report.info_text(load_case(args.case)))
+    case = load_case(args.case)
+    print(report.info_text(case))
+    if case.is_set:
+        from . import sets
+        print(sets.set_info_text(case))
     return 0
 
 
+def _static_set(case, json_path, plot_path):
+    from . import sets
+    sol = sets.solve_set_case(case)
+    print(sets.set_text(case, sol))
+    if json_path:
+        io.write_json(json_path, sets.set_to_dict(case, sol))
+        _wrote(json_path)
+    if plot_path:
+        sets.plot_set_static(sol, title=case.title, path=plot_path)
+        _wrote(plot_path)
+
+
 def _static(case, json_path, plot_path):
+    if case.is_set:
+        return _static_set(case, json_path, plot_path)
     sol = workflows.solve_case(case)
     print(report.static_text(case, sol))
     if json_path:
@@ -89,6 +107,16 @@ def cmd_sweep(args):
 
 def cmd_study(args):
     case = load_case(args.case)
+    if case.is_set:
+        from . import sets
+        study = sets.study_set_case(case, throw=False)
+        _warn_failures(study.solution.result, "study states")
+        print(sets.set_study_text(case, study))
+        if args.plot:
+            p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
+            sets.plot_set_study(study, title=case.title, path=p)
+            _wrote(p)
+        return 0
     study = workflows.study_case(case, throw=False, progress=True)
     _warn_failures(study.solution.result, "study states")
     io.write_study(args.output, case, study)

@@ -71,6 +71,9 @@ __all__ = [
     "solve_set",
     "solve_set_batch",
     "raise_for_set",
+    "PRELOAD_CLASSES",
+    "static_axial_capacity",
+    "preload_class_force",
 ]
 
 #: facings of the named arrangements, bearings in order of increasing z (MODEL.md 10):
@@ -240,6 +243,49 @@ def preload_offset(bearing, preload, curve=None):
 
     x = lax.fori_loop(0, _PRELOAD_NEWTON, body, start)
     return jnp.where(P > 0, x, 0.0)
+
+
+#: preload classes as fractions of the static axial capacity C_0a (:func:`static_axial_capacity`):
+#: the 1 : 2 : 4 steps of the light / medium / heavy classes of spindle-bearing catalogues, scaled
+#: so that the Harris 218 (40 deg, C_0a = 436 kN in this model) gets 1.3 / 2.6 / 5.2 kN, the order
+#: of the catalogue classes of 40 deg bearings of that size (a project choice, not a standard)
+PRELOAD_CLASSES = {"light": 0.003, "medium": 0.006, "heavy": 0.012}
+#: ISO 76 static-capacity contact pressure of ball bearings (Pa)
+STATIC_PRESSURE = 4.2e9
+
+
+def static_axial_capacity(bearing, curve=None, pressure=STATIC_PRESSURE):
+    """C_0a (N): the thrust at which the peak contact pressure at omega = 0 reaches ``pressure``
+    (ISO 76: 4.2 GPa for ball bearings) in the MODEL.md 4 closed form (the larger of the inner
+    and outer contacts' p_max; bisection on the axial approach)."""
+    curve = stiffness_curve(bearing) if curve is None else curve
+    BD = bearing.A
+    a0 = bearing.free_contact_angle
+
+    def pmax(x):
+        F = thrust_at_approach(bearing, x, curve)
+        A1 = BD * jnp.sin(a0) + x
+        L = jnp.sqrt(A1 ** 2 + (BD * jnp.cos(a0)) ** 2)
+        s, c = A1 / L, BD * jnp.cos(a0) / L
+        Q = F / (bearing.n_balls * jnp.maximum(s, 1e-12))
+        return jnp.maximum(contact_ellipse(curve, c, Q, True)[2], contact_ellipse(curve, c, Q, False)[2])
+
+    def body(_, lohi):
+        lo, hi = lohi
+        mid = 0.5 * (lo + hi)
+        big = pmax(mid) > pressure
+        return jnp.where(big, lo, mid), jnp.where(big, mid, hi)
+
+    lo, hi = lax.fori_loop(0, 80, body, (jnp.float64(0.0), 0.02 * bearing.ball_diameter))
+    return thrust_at_approach(bearing, 0.5 * (lo + hi), curve)
+
+
+def preload_class_force(bearing, name: str):
+    """The preload (N) of a class "light" / "medium" / "heavy": :data:`PRELOAD_CLASSES` x C_0a."""
+    key = str(name).lower()
+    if key not in PRELOAD_CLASSES:
+        raise InputError(f"unknown preload class {name!r}; known: {', '.join(PRELOAD_CLASSES)}")
+    return float(PRELOAD_CLASSES[key] * static_axial_capacity(bearing))
 
 
 # ------------------------------------------------------------------------- one bearing

@@ -10,7 +10,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "bearingsim"
 
 #: the edge: reads and writes files, converts units, draws, reports; everything else is the core
-EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "report"}
+EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "report", "sets"}
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath", "life", "limits", "shaft"}
 INFRASTRUCTURE = {"__init__", "_version"}
