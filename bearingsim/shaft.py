@@ -63,6 +63,7 @@ __all__ = [
     "SetSolution",
     "ARRANGEMENTS",
     "arrangement_facings",
+    "arrangement_suggestion",
     "preload_offset",
     "thrust_at_approach",
     "frame_matrix",
@@ -104,11 +105,21 @@ def arrangement_facings(name: str) -> tuple:
     """Facings (s_k) of a named arrangement (:data:`ARRANGEMENTS`), bearings by increasing z."""
     key = str(name).upper()
     if key not in ARRANGEMENTS:
-        import difflib
-        close = difflib.get_close_matches(key, list(ARRANGEMENTS), n=1, cutoff=0.4)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        close = arrangement_suggestion(key)
+        hint = f" (did you mean {close!r}?)" if close else ""
         raise InputError(f"unknown arrangement {name!r}{hint}; known: {', '.join(ARRANGEMENTS)}")
     return ARRANGEMENTS[key]
+
+
+def arrangement_suggestion(name: str):
+    """The known arrangement a misspelt name most likely means (same letters first), or None."""
+    import difflib
+    key = str(name).upper()
+    same = [k for k in ARRANGEMENTS if sorted(k) == sorted(key)]
+    if same:
+        return same[0]
+    close = difflib.get_close_matches(key, list(ARRANGEMENTS), n=1, cutoff=0.4)
+    return close[0] if close else None
 
 
 def frame_matrix(facing):

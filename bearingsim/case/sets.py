@@ -2,10 +2,9 @@
 per problem, naming the key) and the :class:`bearingsim.shaft.BearingSet` it describes."""
 from __future__ import annotations
 
-import difflib
 import math
 
-from ..shaft import ARRANGEMENTS
+from ..shaft import ARRANGEMENTS, arrangement_suggestion
 from .messages import fmt_num
 
 __all__ = ["set_problems", "set_layout"]
@@ -42,8 +41,8 @@ def set_problems(data: dict, problems: list) -> None:
         return
     n0 = len(problems)
     if "arrangement" in s and str(s["arrangement"]).upper() not in ARRANGEMENTS:
-        close = difflib.get_close_matches(str(s["arrangement"]).upper(), list(ARRANGEMENTS), n=1, cutoff=0.4)
-        hint = f"did you mean '{close[0]}'? " if close else ""
+        close = arrangement_suggestion(s["arrangement"])
+        hint = f"did you mean '{close}'? " if close else ""
         problems.append(f"set.arrangement = {s['arrangement']!r} is not a known arrangement: {hint}"
                         f"(known: {', '.join(ARRANGEMENTS)})")
     for key in ("facings", "positions_mm", "preloads_N", "spring_bearings", "second_bearings"):
