@@ -111,7 +111,9 @@ def cmd_study(args):
         from . import sets
         study = sets.study_set_case(case, throw=False)
         _warn_failures(study.solution.result, "study states")
+        sets.write_set_study(args.output, case, study)
         print(sets.set_study_text(case, study))
+        _wrote(args.output)
         if args.plot:
             p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
             sets.plot_set_study(study, title=case.title, path=p)

@@ -16,7 +16,7 @@ from .case.units import from_si
 from .errors import InputError
 
 __all__ = ["solve_set_case", "study_set_case", "SetStudy", "set_text", "set_info_text",
-           "set_study_text", "set_to_dict", "plot_set_static", "plot_set_study"]
+           "set_study_text", "set_to_dict", "write_set_study", "plot_set_static", "plot_set_study"]
 
 DOF = (("x", "um", 1e6), ("y", "um", 1e6), ("axial", "um", 1e6), ("tilt_x", "mrad", 1e3),
        ("tilt_y", "mrad", 1e3))
@@ -160,6 +160,22 @@ def set_to_dict(case, sol) -> dict:
             Q_inner_N=np.asarray(b.Q_inner), Q_outer_N=np.asarray(b.Q_outer),
             p_max_inner_Pa=np.asarray(b.p_max_inner), p_max_outer_Pa=np.asarray(b.p_max_outer)))
     return out
+
+
+def write_set_study(path, case, study: SetStudy):
+    """The HDF5 of ``bearingsim study`` on a set: group ``/set_study`` with ``values`` (in the
+    key's unit), ``axial_load`` (M, N) (N), ``stiffness`` (M, 5, 5) (SI), ``displacement`` (M, 5),
+    ``result`` (M,) and ``bearing_result`` (M, N); attribute ``parameter``."""
+    from .io import case_attrs, write_h5
+    sol = study.solution
+    ds = {"values": (np.asarray(study.values, float), study.unit or "1"),
+          "axial_load": (np.asarray(sol.axial_load), "N"),
+          "stiffness": (np.asarray(sol.stiffness), "SI (N/m, N/rad, N m/m, N m/rad)"),
+          "displacement": (np.asarray(sol.displacement), "m, m, m, rad, rad"),
+          "result": (np.asarray(sol.result), "1"),
+          "bearing_result": (np.asarray(sol.bearing_result), "1"),
+          "@attrs": {"parameter": study.parameter}}
+    write_h5(path, {"set_study": ds}, attrs=case_attrs(case))
 
 
 # ------------------------------------------------------------------------------------ plots
