@@ -102,6 +102,31 @@ def set_info_text(case) -> str:
     return "\n".join(lines)
 
 
+def _ratings(case):
+    """C (N) of every bearing of the set, or None when [set] gives no rating."""
+    s = case.data["set"]
+    if "dynamic_load_rating_kN" not in s:
+        return None
+    from .case.sets import set_layout
+    facings, _, _, _, _, seconds = set_layout(s, 0.0)
+    C2 = s.get("second_dynamic_load_rating_kN")
+    if seconds and C2 is None:
+        return None
+    return [1e3 * (C2 if k in seconds else s["dynamic_load_rating_kN"]) for k in range(len(facings))]
+
+
+def set_lives_hours(case, sol):
+    """(per-bearing lives (N,), set life) in hours at the case's speed (ISO/TS 16281), or None."""
+    C = _ratings(case)
+    if C is None:
+        return None
+    from .life import life_hours
+    from .shaft import set_lives
+    L, Ls = set_lives(case.bearing_set(), sol, C)
+    w = case.operation().speed
+    return np.asarray(life_hours(L, w)), float(life_hours(Ls, w))
+
+
 def set_text(case, sol) -> str:
     """Per bearing: position, facing, preload kind, axial load (operating preload), lift-off
     margin, peak pressure and the per-ball table; per set: displacement and stiffness."""
@@ -112,6 +137,10 @@ def set_text(case, sol) -> str:
              "set stiffness: " + ", ".join(f"{n} {K[i, i] * s:.2f} {u}" for n, i, u, s in K_DIAG), ""]
     margin = np.asarray(sol.lift_off_margin)
     ratio = np.asarray(sol.ball_load_ratio)
+    lives = set_lives_hours(case, sol)
+    if lives is not None:
+        lines.insert(4, "ISO/TS 16281 L10r life: set " + f"{lives[1]:.4g} h; "
+                     + ", ".join(f"bearing {k + 1} {h:.4g} h" for k, h in enumerate(lives[0])))
     for k, b in enumerate(sol.bearings):
         az = np.degrees(np.asarray(sol.shaft_azimuth(k)))
         lines.append(f"bearing {k + 1}: z = {float(np.asarray(sol.positions)[k]) * 1e3:.2f} mm, facing "
@@ -146,10 +175,13 @@ def set_study_text(case, study: SetStudy) -> str:
 
 def set_to_dict(case, sol) -> dict:
     """A JSON record of a set's state (SI; azimuths of each bearing in the shaft frame)."""
+    lives = set_lives_hours(case, sol)
     out = dict(title=case.title, result=int(sol.result), displacement=np.asarray(sol.displacement),
                displacement_units="m, m, m, rad, rad", stiffness=np.asarray(sol.stiffness),
                stiffness_units="N/m (forces/translations), N/rad, N m/m, N m/rad",
                bearings=[])
+    if lives is not None:
+        out["life_hours"] = lives[1]
     for k, b in enumerate(sol.bearings):
         out["bearings"].append(dict(
             position_m=float(np.asarray(sol.positions)[k]), facing=int(np.asarray(sol.facings)[k]),
@@ -159,6 +191,8 @@ def set_to_dict(case, sol) -> dict:
             alpha_inner_rad=np.asarray(b.alpha_inner), alpha_outer_rad=np.asarray(b.alpha_outer),
             Q_inner_N=np.asarray(b.Q_inner), Q_outer_N=np.asarray(b.Q_outer),
             p_max_inner_Pa=np.asarray(b.p_max_inner), p_max_outer_Pa=np.asarray(b.p_max_outer)))
+        if lives is not None:
+            out["bearings"][-1]["life_hours"] = float(lives[0][k])
     return out
 
 

@@ -75,6 +75,7 @@ __all__ = [
     "PRELOAD_CLASSES",
     "static_axial_capacity",
     "preload_class_force",
+    "set_lives",
 ]
 
 #: facings of the named arrangements, bearings in order of increasing z (MODEL.md 10):
@@ -297,6 +298,18 @@ def preload_class_force(bearing, name: str):
     if key not in PRELOAD_CLASSES:
         raise InputError(f"unknown preload class {name!r}; known: {', '.join(PRELOAD_CLASSES)}")
     return float(PRELOAD_CLASSES[key] * static_axial_capacity(bearing))
+
+
+def set_lives(bset, sol, C, rows=1):
+    """ISO/TS 16281 basic reference rating lives (10^6 revolutions, MODEL.md 11; bearingsim.life)
+    of every bearing of a solved set from its per-ball loads, and of the set (bearings fail
+    independently): ``(L_k (..., N), L_set (...))``.  ``C``: basic dynamic load rating (N),
+    scalar or (N,) (one per bearing)."""
+    from .life import rating_life, set_life
+    C = jnp.broadcast_to(jnp.asarray(C, jnp.float64), (bset.n,))
+    L = jnp.stack([rating_life(b, C[k], s.Q_inner, s.Q_outer, rows)
+                   for k, (b, s) in enumerate(zip(bset.bearings, sol.bearings))], axis=-1)
+    return L, set_life(L)
 
 
 # ------------------------------------------------------------------------- one bearing

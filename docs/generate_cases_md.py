@@ -86,6 +86,8 @@ moment_y_Nm = 0
 # preloads_N = [2000, 2000]              #   or each bearing's preload (must balance)
 # spring_bearings = [2]                  # 1-based: outer ring on springs (constant preload)
 # second_bearings = [2]                  # 1-based: bearings of [set.second_bearing]
+# dynamic_load_rating_kN = 130           # catalogue C of [bearing]: ISO/TS 16281 lives
+# second_dynamic_load_rating_kN = 6.0    #   and of [set.second_bearing]
 # [set.second_bearing]                   # the keys of [bearing], for those bearings
 # balls = 8
 # ball_diameter_mm = 6.746

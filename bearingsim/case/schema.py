@@ -316,6 +316,10 @@ SCHEMA: dict[str, Section] = {
                                    "on a spring: constant preload", "", OPTIONAL),
             "second_bearings": Key("numbers", "bearings (1-based) that are [set.second_bearing] "
                                    "instead of [bearing]", "", OPTIONAL),
+            "dynamic_load_rating_kN": _num("basic dynamic load rating C of [bearing] (catalogue): "
+                                           "gives the ISO/TS 16281 life of each bearing and of the "
+                                           "set (MODEL.md 11)", "kN", OPTIONAL, gt=0),
+            "second_dynamic_load_rating_kN": _num("C of [set.second_bearing]", "kN", OPTIONAL, gt=0),
         },
         fill_defaults=False,
         exactly_one=(("arrangement", "facings"),),

@@ -21,6 +21,7 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "deg": (math.pi / 180.0, "deg", "rad"),
     "rpm": (2.0 * math.pi / 60.0, "rpm", "rad/s"),
     "N": (1.0, "N", "N"),
+    "kN": (1e3, "kN", "N"),
     "Nm": (1.0, "N m", "N m"),
     "GPa": (1e9, "GPa", "Pa"),
     "kg_m3": (1.0, "kg/m^3", "kg/m^3"),
