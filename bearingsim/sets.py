@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .case.units import from_si
 from .errors import InputError
 
 __all__ = ["solve_set_case", "study_set_case", "SetStudy", "set_text", "set_info_text",

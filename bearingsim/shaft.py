@@ -448,10 +448,6 @@ def _group_q(sy: _System, x, g):
     return jnp.einsum("gij,j->gi", bk.G, x[:5]) + shift[:, None] * _EZ
 
 
-def _vmap_b(f, *args):
-    return jax.vmap(f)(*args)
-
-
 def _evaluate(sy: _System, op, x, Ys, Yus, jac=True):
     return [jax.vmap(lambda bk, q, y, yu: _ball_pieces(bk, op, q, y, yu if bk.defect else None, jac))(
         bk, _group_q(sy, x, g), Ys[g], Yus[g]) for g, bk in enumerate(sy.groups)]
