@@ -65,9 +65,10 @@ def _static(case, json_path, plot_path):
     if case.is_set:
         return _static_set(case, json_path, plot_path)
     sol = workflows.solve_case(case)
-    print(report.static_text(case, sol))
+    assessment = workflows.assess_case(case, sol)
+    print(report.static_text(case, sol, assessment))
     if json_path:
-        io.write_static(json_path, sol)
+        io.write_static(json_path, sol, assessment)
         print()
         _wrote(json_path)
     if plot_path:

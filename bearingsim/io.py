@@ -65,8 +65,48 @@ STATIC_BALL_FIELDS = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer"
                       ("orbital_speed", "rpm"), ("spall_depth", "um"), ("spall_depth_inner", "um"))
 
 
-def static_to_dict(sol, bearing=None) -> dict:
-    """The fixed JSON interface of ``bearingsim static`` (units in the key names; stiffness SI)."""
+def assessment_to_dict(assessment) -> dict:
+    """The ``limits`` and ``life`` entries of the ``bearingsim static`` JSON (docs/results.md)."""
+    a = assessment
+    L = a.limits
+    st = a.settings
+    arr = lambda x: np.asarray(x)
+    deg = lambda x: from_si(np.asarray(x), "deg")
+    limits = {
+        "contact_pressure_limit_MPa": from_si(float(st["pressure_limit"]), "MPa"),
+        "friction_coefficient": float(st["friction_coefficient"]),
+        "max_pressure_ratio": float(L.max_pressure_ratio),
+        "max_friction_ratio": float(L.max_friction_ratio),
+        "min_edge_margin_deg": float(deg(L.min_edge_margin)),
+        "overpressure": bool(L.any_overpressure),
+        "slip": bool(L.any_slip),
+        "truncated": bool(L.any_truncated),
+        "over_shoulder": bool(L.any_over_shoulder),
+        "balls": {
+            "pressure_ratio_inner": arr(L.pressure_ratio_inner), "pressure_ratio_outer": arr(L.pressure_ratio_outer),
+            "friction_needed_inner": arr(L.friction_inner), "friction_needed_outer": arr(L.friction_outer),
+            "friction_ratio": arr(L.friction_ratio),
+            "edge_margin_high_inner_deg": deg(L.edge_high_inner), "edge_margin_low_inner_deg": deg(L.edge_low_inner),
+            "edge_margin_high_outer_deg": deg(L.edge_high_outer), "edge_margin_low_outer_deg": deg(L.edge_low_outer),
+            "truncated_inner": arr(L.truncated_inner).tolist(), "truncated_outer": arr(L.truncated_outer).tolist(),
+        },
+    }
+    life = None
+    if st["dynamic_load_rating"] is not None:
+        life = {
+            "dynamic_load_rating_kN": from_si(float(st["dynamic_load_rating"]), "kN"),
+            "nominal_contact_angle_deg": from_si(float(a.nominal_angle), "deg"),
+            "L10r_Mrev": a.rating_life,
+            "L10r_inner_Mrev": None if a.ring_lives is None else a.ring_lives[0],
+            "L10r_outer_Mrev": None if a.ring_lives is None else a.ring_lives[1],
+            "L10r_h": a.life_hours,
+        }
+    return {"limits": limits, "life": life}
+
+
+def static_to_dict(sol, bearing=None, assessment=None) -> dict:
+    """The fixed JSON interface of ``bearingsim static`` (units in the key names; stiffness SI);
+    with ``assessment`` (:func:`bearingsim.workflows.assess_case`) also ``limits`` and ``life``."""
     q = np.asarray(sol.displacement)
     d = {
         "converged": bool(int(sol.result) == 0),
@@ -88,6 +128,8 @@ def static_to_dict(sol, bearing=None) -> dict:
             "matrix": np.asarray(sol.stiffness),
         },
     }
+    if assessment is not None:
+        d.update(assessment_to_dict(assessment))
     return _to_jsonable(d, "static")
 
 
@@ -190,9 +232,9 @@ def case_attrs(case) -> dict:
     return {"case_toml": case.text, "title": case.title}
 
 
-def write_static(path, sol):
+def write_static(path, sol, assessment=None):
     """The JSON of ``bearingsim static`` (:func:`static_to_dict`)."""
-    write_json(path, static_to_dict(sol))
+    write_json(path, static_to_dict(sol, assessment=assessment))
 
 
 def write_sweep(path, case, sol):

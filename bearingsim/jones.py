@@ -21,8 +21,10 @@ Design
   implicit-function-theorem derivatives) and gives the stiffness dR/dq (the Schur complement).
 * Validity (never a silent wrong answer): a converged state is re-checked from its per-ball
   output -- finite, no loaded contact with |alpha| >= 90 deg, every ball and the ring in
-  equilibrium, contact deformations <= 1 % of D and ring translations within the clearance
-  plus that -- and otherwise carries its own result code.  Contact pressures above 4.2 GPa
+  equilibrium, contact deformations <= 1 % of D and ring translations within twice the
+  groove-centre distance plus that, no angular contact bearing loaded against its low shoulders
+  (F_z < 0 or a ball pushed to -z), not all loads zero at speed -- and otherwise carries its own
+  result code.  Contact pressures above 4.2 GPa
   are a warning (ISO 76 static-capacity stress: permanent deformation ~1e-4 D starts there).
 
 Unknowns are scaled to micrometres (tilts as micrometres at the groove-centre radius R_i),
@@ -105,10 +107,13 @@ class RESULTS(ResultCode):
                     "a single angular contact bearing carries axial load in one direction only (+Fz, its "
                     "contact direction); for a negative or reversing axial load use a preloaded pair "
                     "(DB back-to-back or DF face-to-face), or turn the bearing round (Fz > 0)")
+    #: set by the workflows from bearingsim.limits (a healthy bearing's static state), not by solve
     over_shoulder = (8, "a loaded contact lies beyond the edge of its groove (contact angle above the "
                      "shoulder angle): the ball rides on the shoulder edge, outside the model",
-                     "the axial load is too large for this groove: reduce it, or use a bearing with a "
-                     "larger contact angle or higher shoulders (check the [shoulders] angles of the case)")
+                     "contact angles climb with the axial load and, at speed, on lightly loaded balls "
+                     "(the centrifugal force moves the outer contact down, the inner one up): reduce the "
+                     "axial load or the moment, keep the balls loaded at speed (a preloaded pair), or "
+                     "check the shoulder angles ([shoulders] keys of the case)")
     no_load = (9, "no load on the inner ring at speed: the balls ride on the outer raceway under their "
                "centrifugal force alone, nothing drives them and the ring's position is undetermined",
                "give a load; at rest zero load is the unloaded bearing (q = 0, no ball load)")

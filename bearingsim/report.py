@@ -10,7 +10,7 @@ import numpy as np
 from .case.units import from_si, label
 from .io import RING_DOFS
 
-__all__ = ["table", "quantity", "info_text", "static_text", "study_text", "compare_text", "spectrum_text"]
+__all__ = ["table", "quantity", "info_text", "static_text", "limits_text", "study_text", "compare_text", "spectrum_text"]
 
 
 
@@ -101,8 +101,9 @@ def info_text(case) -> str:
     return "\n".join(out)
 
 
-def static_text(case, sol) -> str:
-    """Per-ball table, ring displacement, cage speed and stiffness diagonal of a solution."""
+def static_text(case, sol, assessment=None) -> str:
+    """Per-ball table, ring displacement, cage speed and stiffness diagonal of a solution; with
+    ``assessment`` (:func:`bearingsim.workflows.assess_case`) the limits and the life."""
     q = np.asarray(sol.displacement)
     K = np.asarray(sol.stiffness)
     lines = [f"{case.title}",
@@ -123,6 +124,61 @@ def static_text(case, sol) -> str:
     lines += ["", "stiffness diagonal: "
               f"k_x {K[0,0]:.4e} N/m, k_y {K[1,1]:.4e} N/m, k_axial {K[2,2]:.4e} N/m, "
               f"k_tilt_x {K[3,3]:.4e} N m/rad, k_tilt_y {K[4,4]:.4e} N m/rad"]
+    if assessment is not None:
+        lines.append(limits_text(assessment))
+    return "\n".join(lines)
+
+
+def limits_text(assessment) -> str:
+    """Per-contact limits (pressure, friction raceway control needs, ellipse against the shoulders)
+    and the ISO/TS 16281 life of an :class:`~bearingsim.workflows.Assessment`."""
+    a = assessment
+    L, st = a.limits, a.settings
+    deg = lambda x: from_si(np.asarray(x), "deg")
+    mu_av = float(st["friction_coefficient"])
+    flags = lambda j: "".join(c for c, f in (("P", L.overpressure), ("S", L.slip), ("T", L.truncated),
+                                               ("X", L.over_shoulder)) if bool(np.asarray(f)[j]))
+    mu = np.maximum(np.asarray(L.friction_inner), np.asarray(L.friction_outer))
+    rows = [(j, float(np.asarray(L.pressure_ratio_inner)[j]), float(np.asarray(L.pressure_ratio_outer)[j]), float(mu[j]),
+             float(deg(L.edge_high_inner)[j]), float(deg(L.edge_low_inner)[j]), float(deg(L.edge_high_outer)[j]),
+             float(deg(L.edge_low_outer)[j]), flags(j) or "-") for j in range(mu.shape[-1])]
+    loaded_edges = lambda v: "-" if v >= 179.0 else f"{v:.2f}"
+    lines = ["", f"Limits (MODEL.md 11): p_max / {from_si(float(st['pressure_limit']), 'MPa'):.0f} MPa, friction "
+             f"raceway control needs (available {mu_av:g}), contact ellipse to the shoulder edges "
+             "(deg; negative: over the edge)",
+             table(("ball", "p_i/lim", "p_o/lim", "mu need", "edge i hi", "edge i lo", "edge o hi", "edge o lo",
+                    "flags"),
+                   [(r[0], r[1], r[2], r[3], loaded_edges(r[4]), loaded_edges(r[5]), loaded_edges(r[6]),
+                     loaded_edges(r[7]), r[8]) for r in rows],
+                   ("{}", "{:.3f}", "{:.3f}", "{:.4f}", "{}", "{}", "{}", "{}", "{}")),
+             "flags: P pressure above the limit, S raceway control needs more friction than available "
+             "(the ball slips), T ellipse truncated by a shoulder, X contact centre over a shoulder edge"]
+    summary = []
+    if bool(L.any_overpressure):
+        summary.append(f"pressure above the limit (max {float(L.max_pressure_ratio):.3f} x)")
+    if bool(L.any_slip):
+        summary.append(f"raceway control needs {float(L.max_friction_ratio):.2f} x the available friction")
+    if bool(L.any_over_shoulder):
+        summary.append("a loaded contact centred over a shoulder edge (flag X: outside the model for that ball; "
+                       "refused for a healthy bearing)")
+    if bool(L.any_truncated):
+        summary.append(f"contact ellipse truncated by a shoulder (by {-float(deg(L.min_edge_margin)):.2f} deg)")
+    lines.append("limits: " + ("; ".join(summary) if summary else "all within (max p/limit "
+                                                                   f"{float(L.max_pressure_ratio):.3f}, max mu need/available "
+                                                                   f"{float(L.max_friction_ratio):.3f}, min edge margin "
+                                                                   f"{float(deg(L.min_edge_margin)):.2f} deg)"))
+    if st["dynamic_load_rating"] is not None:
+        C = from_si(float(st["dynamic_load_rating"]), "kN")
+        if a.rating_life is None:
+            lines.append(f"life (ISO/TS 16281, C = {C:g} kN): not computed (a defect: the rating life is a "
+                         "healthy bearing's; or no loaded contact)")
+        else:
+            rings = ", ".join(f"{n} ring {v:.4g}" if v is not None else f"{n} ring unloaded"
+                              for n, v in zip(("inner", "outer"), a.ring_lives))
+            hours = f", {a.life_hours:.4g} h at the case's speed" if a.life_hours is not None else \
+                " (standstill: no hours)"
+            lines.append(f"life (ISO/TS 16281, C = {C:g} kN, nominal angle {from_si(a.nominal_angle, 'deg'):.1f} deg): "
+                         f"L10r = {a.rating_life:.4g} million revolutions ({rings}){hours}")
     return "\n".join(lines)
 
 

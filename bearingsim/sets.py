@@ -102,16 +102,15 @@ def set_info_text(case) -> str:
 
 
 def _ratings(case):
-    """C (N) of every bearing of the set, or None when [set] gives no rating."""
+    """C (N) of every bearing of the set ([bearing] / [set.second_bearing]
+    dynamic_load_rating_kN), or None when a bearing has no rating."""
     s = case.data["set"]
-    if "dynamic_load_rating_kN" not in s:
-        return None
     from .case.sets import set_layout
     facings, _, _, _, _, seconds = set_layout(s, 0.0)
-    C2 = s.get("second_dynamic_load_rating_kN")
-    if seconds and C2 is None:
-        return None
-    return [1e3 * (C2 if k in seconds else s["dynamic_load_rating_kN"]) for k in range(len(facings))]
+    C1 = case.data["bearing"].get("dynamic_load_rating_kN")
+    C2 = s.get("second_bearing", {}).get("dynamic_load_rating_kN")
+    C = [C2 if k in seconds else C1 for k in range(len(facings))]
+    return None if any(c is None for c in C) else [1e3 * c for c in C]
 
 
 def set_lives_hours(case, sol):

@@ -8,6 +8,7 @@ sweep grid, dynamics settings), so Python and the command line give the same num
 function                     result                                      command
 ============================ =========================================== ======================
 :func:`solve_case`           ``JonesSolution``                           ``bearingsim static``
+:func:`assess_case`          :class:`Assessment` (limits, life)          ``bearingsim static``
 :func:`sweep_case`           ``JonesSolution`` with a leading (N,) axis  ``bearingsim sweep``
 :func:`study_case`           :class:`Study` (solution (M, N))            ``bearingsim study``
 :func:`simulate_case`        ``DynamicsResult``                          ``bearingsim simulate``
@@ -32,7 +33,7 @@ from .case import check_sampling, unit_of
 from .case.units import from_si
 from .errors import InputError, NotConvergedError
 
-__all__ = ["solve_case", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
+__all__ = ["solve_case", "refuse_over_shoulder", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
            "spectrum_file", "envelope_band", "simulation_spectrum", "Study", "Comparison",
            "EnvelopeAnalysis", "STUDY_CHUNK"]
 
@@ -57,12 +58,80 @@ def _check(sol, case, what, throw):
 
 # ------------------------------------------------------------------------------------ solve
 def solve_case(case, *, throw=True):
-    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``)."""
+    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``).  A healthy
+    bearing's converged state with a loaded contact centred at or beyond a shoulder edge is refused
+    (:func:`refuse_over_shoulder`); with a defect it is flagged in the limits (a ball over the
+    defect may climb a shoulder at one cage angle)."""
     import bearingsim as bs
 
-    sol = bs.solve(case.bearing(), case.operation(), case.loads(), cage_angle=case.cage_angle,
-                   spall=case.spall(), hertz_method=case.hertz_method, throw=False)
+    b, op, spall = case.bearing(), case.operation(), case.spall()
+    sol = bs.solve(b, op, case.loads(), cage_angle=case.cage_angle,
+                   spall=spall, hertz_method=case.hertz_method, throw=False)
+    if spall is None:
+        sol = refuse_over_shoulder(sol, b, op)
     return _check(sol, case, "the quasi-static solve", throw)
+
+
+def refuse_over_shoulder(sol, bearing, op):
+    """``sol`` with result ``over_shoulder`` (8) when a converged state has a loaded contact centred
+    at or beyond a shoulder edge, or ``low_shoulder`` (7) when that edge is an angular contact
+    bearing's low one; else ``sol`` itself (single state)."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from .jones import RESULTS
+    from .limits import contact_limits
+
+    if int(sol.result) != 0 or not bool(contact_limits(sol, bearing, op.control).any_over_shoulder):
+        return sol
+    sh = np.asarray(bearing.shoulders)
+    low = np.any((np.asarray(sol.Q_inner) > 0) & (np.asarray(sol.alpha_inner) <= -sh[1])) or np.any(
+        (np.asarray(sol.Q_outer) > 0) & (np.asarray(sol.alpha_outer) <= -sh[3]))
+    code = RESULTS.low_shoulder if (low and bool(bearing.angular_contact)) else RESULTS.over_shoulder
+    return eqx.tree_at(lambda s: s.result, sol, jnp.asarray(int(code), jnp.int32))
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """Limits and life of a quasi-static state (:func:`assess_case`; ``bearingsim static``).
+
+    ``limits``: :class:`bearingsim.limits.ContactLimits`; ``settings``: the case's
+    ``limits_settings()`` (SI); ``rating_life``: ISO/TS 16281 L10r (10^6 revolutions) or None
+    (no dynamic load rating in the case, no load, or a defect: the life is a healthy bearing's); ``ring_lives``: (inner, outer) in 10^6
+    revolutions or None; ``life_hours``: at the case's speed, None at standstill or without a
+    life; ``nominal_angle``: the contact angle of the life formula (rad; 0 for a deep groove)."""
+
+    limits: object
+    settings: dict
+    rating_life: float | None
+    ring_lives: tuple | None
+    life_hours: float | None
+    nominal_angle: float
+
+
+def assess_case(case, sol) -> Assessment:
+    """Per-contact limits (MODEL.md 11: pressure, the friction raceway control needs, the
+    ellipse against the shoulders) and, when the case gives ``bearing.dynamic_load_rating_kN``,
+    the ISO/TS 16281 rating life of the state ``sol`` of ``case`` (single state)."""
+    from . import life
+    from .limits import contact_limits
+
+    b, op = case.bearing(), case.operation()
+    st = case.limits_settings()
+    lim = contact_limits(sol, b, op.control, pressure_limit=st["pressure_limit"],
+                         friction_coefficient=st["friction_coefficient"])
+    alpha = float(b.free_contact_angle) if bool(b.angular_contact) else 0.0
+    L = rings = hours = None
+    C = st["dynamic_load_rating"]
+    if C is not None and int(sol.result) == 0 and case.spall() is None:
+        Lr = float(life.rating_life(b, C, sol.Q_inner, sol.Q_outer, contact_angle=alpha))
+        if np.isfinite(Lr):
+            L = Lr
+            Li, Lo = life.ring_lives(b, C, sol.Q_inner, sol.Q_outer, contact_angle=alpha)
+            rings = tuple(float(x) if np.isfinite(float(x)) else None for x in (Li, Lo))
+            h = float(life.life_hours(Lr, op.speed))
+            hours = h if np.isfinite(h) else None
+    return Assessment(lim, st, L, rings, hours, alpha)
 
 
 def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):

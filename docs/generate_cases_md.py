@@ -50,6 +50,18 @@ inner_groove_curvature = 0.5232          # f_i = r_i / D
 outer_groove_curvature = 0.5232          # f_o = r_o / D
 free_contact_angle_deg = 40.0            # exactly one of these two:
 # diametral_clearance_mm = 0.4825        #   cos alpha_0 = 1 - P_d / (2 B D)
+design = "auto"                          # "angular_contact" here (alpha_0 > 0) | "deep_groove"
+dynamic_load_rating_kN = 143             # catalogue C: ISO/TS 16281 life in `bearingsim static`
+
+# [shoulders]                            # groove-edge angles; default: the design's (land heights)
+# inner_high_deg = 74.1                  #   angular contact: 0.38 D high, 0.01 D low
+# inner_low_deg = 11.2
+# outer_high_deg = 74.1
+# outer_low_deg = 11.2
+
+[limits]                                 # reported per contact by `bearingsim static`
+contact_pressure_limit_MPa = 4200        # ISO 76 static capacity of ball bearings
+friction_coefficient = 0.07              # available at a raceway contact (estimate)
 
 [material]                               # rings (and balls, unless [material.ball] is given)
 youngs_modulus_GPa = 207.5
@@ -86,8 +98,6 @@ moment_y_Nm = 0
 # preloads_N = [2000, 2000]              #   or each bearing's preload (must balance)
 # spring_bearings = [2]                  # 1-based: outer ring on springs (constant preload)
 # second_bearings = [2]                  # 1-based: bearings of [set.second_bearing]
-# dynamic_load_rating_kN = 130           # catalogue C of [bearing]: ISO/TS 16281 lives
-# second_dynamic_load_rating_kN = 6.0    #   and of [set.second_bearing]
 # [set.second_bearing]                   # the keys of [bearing], for those bearings
 # balls = 8
 # ball_diameter_mm = 6.746
@@ -96,6 +106,8 @@ moment_y_Nm = 0
 # outer_groove_curvature = 0.52
 # diametral_clearance_mm = 0.0           # exactly one of these two:
 # free_contact_angle_deg = 0.0
+# design = "auto"
+# dynamic_load_rating_kN = 9.95          # its catalogue C: the set's ISO/TS 16281 life
 
 [defect]                                 # omit the section for a healthy bearing
 location = "outer"                       # or "inner" (turns with the inner ring) | "ball"

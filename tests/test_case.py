@@ -879,3 +879,37 @@ def test_set_cases_build_their_sets():
     rotor = load_case(CASES_DIR / "cwru_rotor.toml").bearing_set()
     assert [b.n_balls for b in rotor.bearings] == [9, 8]
     np.testing.assert_allclose(float(rotor.bearings[1].ball_diameter), 0.2656 * 25.4e-3, rtol=1e-5)
+
+# ----------------------------------------------------------------------------------------------
+# shoulders, design, limits, dynamic load rating (issue 21)
+# ----------------------------------------------------------------------------------------------
+def test_shoulder_design_and_limits_keys():
+    c = parse_case(MINIMAL)
+    assert c.get("bearing.design") == "auto" and c.get("bearing.dynamic_load_rating_kN") is None
+    assert c.limits_settings() == {"pressure_limit": 4.2e9, "friction_coefficient": 0.07,
+                                   "dynamic_load_rating": None}
+    b = c.bearing()                      # alpha_0 = 40 deg given: an angular contact bearing
+    assert bool(b.angular_contact)
+    sh = np.degrees(np.asarray(b.shoulders))
+    c2 = parse_case(MINIMAL + "[shoulders]\nouter_low_deg = 5\n[limits]\nfriction_coefficient = 0.1\n"
+                    "contact_pressure_limit_MPa = 3000\n")
+    sh2 = np.degrees(np.asarray(c2.bearing().shoulders))
+    np.testing.assert_allclose(sh2, [sh[0], sh[1], sh[2], 5.0], rtol=1e-12)
+    assert c2.limits_settings()["pressure_limit"] == pytest.approx(3e9)
+    assert c2.limits_settings()["friction_coefficient"] == 0.1
+    c3 = c.with_value("bearing.dynamic_load_rating_kN", 143.0).with_value("bearing.design", "deep_groove")
+    assert c3.limits_settings()["dynamic_load_rating"] == pytest.approx(143e3)
+    assert not bool(c3.bearing().angular_contact)
+
+
+def test_clearance_gives_a_deep_groove_unless_told():
+    text = MINIMAL.replace("free_contact_angle_deg = 40.0", "diametral_clearance_mm = 0.05")
+    assert "diametral_clearance_mm" in text
+    assert parse_case(text).bearing().design == "deep_groove"
+    c = parse_case(text.replace("[bearing]", '[bearing]\ndesign = "angular_contact"'))
+    assert c.bearing().design == "angular_contact"
+
+
+def test_shoulder_angle_out_of_range():
+    assert one_problem(MINIMAL + "[shoulders]\ninner_high_deg = 0\n") == (
+        "cases/x.toml: shoulders.inner_high_deg = 0 is out of range: must be > 0 and < 90 deg")

@@ -42,6 +42,8 @@ import copy
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .files import case_path, parse_toml, read_case_text, shipped_cases, shipped_cases_dir
 from .messages import fmt_value, suggest
 from .reference import schema_reference_markdown
@@ -161,10 +163,31 @@ class Case:
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
         args = (b["balls"], b["ball_diameter"], b["pitch_diameter"], b["inner_groove_curvature"],
                 b["outer_groove_curvature"])
+        design = b.get("design", "auto")
         if "diametral_clearance" in b:
-            return Bearing.from_clearance(*args, b["diametral_clearance"], ball_material=balls,
-                                          ring_material=rings)
-        return Bearing(*args, b["free_contact_angle"], balls, rings)
+            bearing = Bearing.from_clearance(*args, b["diametral_clearance"], ball_material=balls,
+                                             ring_material=rings,
+                                             design="deep_groove" if design == "auto" else design)
+        else:
+            bearing = Bearing(*args, b["free_contact_angle"], balls, rings, design=design)
+        given = self.si("shoulders") if section_raw(self.data, "shoulders") else {}
+        if given:
+            import jax.numpy as jnp
+            names = ("inner_high", "inner_low", "outer_high", "outer_low")
+            sh = [given.get(n, d) for n, d in zip(names, np.asarray(bearing.shoulders).tolist())]
+            bearing = Bearing(*args, bearing.free_contact_angle, balls, rings, jnp.asarray(sh),
+                              bearing.design)
+        return bearing
+
+    def limits_settings(self) -> dict:
+        """SI settings of the per-contact limits and the life: ``pressure_limit`` (Pa),
+        ``friction_coefficient``, ``dynamic_load_rating`` (N, or None)."""
+        lim = self.si("limits")
+        return {
+            "pressure_limit": lim["contact_pressure_limit"],
+            "friction_coefficient": lim["friction_coefficient"],
+            "dynamic_load_rating": self.si("bearing").get("dynamic_load_rating"),
+        }
 
     @property
     def is_set(self) -> bool:
@@ -178,10 +201,12 @@ class Case:
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
         args = (b["balls"], b["ball_diameter"], b["pitch_diameter"], b["inner_groove_curvature"],
                 b["outer_groove_curvature"])
+        design = b.get("design", "auto")
         if "diametral_clearance" in b:
             return Bearing.from_clearance(*args, b["diametral_clearance"], ball_material=balls,
-                                          ring_material=rings)
-        return Bearing(*args, b["free_contact_angle"], balls, rings)
+                                          ring_material=rings,
+                                          design="deep_groove" if design == "auto" else design)
+        return Bearing(*args, b["free_contact_angle"], balls, rings, design=design)
 
     def bearing_set(self):
         """:class:`bearingsim.shaft.BearingSet` of [set] (SI; preload classes resolved), or None."""

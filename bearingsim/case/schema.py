@@ -192,6 +192,14 @@ _BEARING_KEYS = {
                                            ge=0, le=80),
             "diametral_clearance_mm": _num("diametral clearance P_d; then cos alpha_0 = 1 - P_d / (2 B D), "
                                            "B = f_i + f_o - 1", "mm", OPTIONAL, ge=0),
+    "design": _enum("bearing design, for its shoulders and its life: \"deep_groove\" (full shoulders on "
+                    "both sides of both rings, nominal contact angle 0), \"angular_contact\" (one high and "
+                    "one low shoulder per ring: axial load in +z only), \"auto\" (deep groove when given "
+                    "by diametral_clearance_mm or alpha_0 = 0, else angular contact)",
+                    ("auto", "deep_groove", "angular_contact"), "auto"),
+    "dynamic_load_rating_kN": _num("basic dynamic load rating C (catalogue); gives the ISO/TS 16281 "
+                                   "rating life L10r in `bearingsim static` (of each bearing and of the "
+                                   "set for a [set] case)", "kN", OPTIONAL, gt=0),
 }
 
 #: section path -> Section.  Order is the order of the docs and of emitted TOML.
@@ -215,6 +223,31 @@ SCHEMA: dict[str, Section] = {
             "diametral_clearance_mm gives a free contact angle within [0, 80] deg: "
             "P_d <= 2 B D (1 - cos 80 deg)",
         ),
+    ),
+    "shoulders": Section(
+        "Groove-edge (shoulder) angles of the rings, measured at the groove's curvature centre from the "
+        "groove bottom, positive on the side of the contact direction (docs/physics.md \"Shoulders\"); a "
+        "land height h (in ball diameters) above the groove bottom is the angle arccos(1 - h / f).  Each key "
+        "defaults to the design's value: deep groove h = 0.2 D on both sides (~52 deg), angular contact "
+        "h = 0.38 D high (~74 deg) and 0.01 D low (~11 deg).",
+        {
+            "inner_high_deg": _num("inner ring, high-shoulder side", "deg", OPTIONAL, gt=0, lt=90),
+            "inner_low_deg": _num("inner ring, low-shoulder side", "deg", OPTIONAL, ge=0, lt=90),
+            "outer_high_deg": _num("outer ring, high-shoulder side", "deg", OPTIONAL, gt=0, lt=90),
+            "outer_low_deg": _num("outer ring, low-shoulder side", "deg", OPTIONAL, ge=0, lt=90),
+        },
+        fill_defaults=False,
+    ),
+    "limits": Section(
+        "Limits reported per contact by `bearingsim static` (MODEL.md section 11).",
+        {
+            "contact_pressure_limit_MPa": _num("peak Hertz pressure limit (ISO 76 static capacity of ball "
+                                               "bearings: 4200 MPa)", "MPa", 4200.0, gt=0),
+            "friction_coefficient": _num("friction (traction) coefficient available at a raceway contact, "
+                                         "against which the coefficient raceway control needs, "
+                                         "lambda M_g / (D Q), is checked (an estimate: 0.03-0.1 lubricated)",
+                                         "", 0.07, gt=0),
+        },
     ),
     "material": Section(
         "Material of the rings, and of the balls unless [material.ball] is given. "
@@ -316,10 +349,6 @@ SCHEMA: dict[str, Section] = {
                                    "on a spring: constant preload", "", OPTIONAL),
             "second_bearings": Key("numbers", "bearings (1-based) that are [set.second_bearing] "
                                    "instead of [bearing]", "", OPTIONAL),
-            "dynamic_load_rating_kN": _num("basic dynamic load rating C of [bearing] (catalogue): "
-                                           "gives the ISO/TS 16281 life of each bearing and of the "
-                                           "set (MODEL.md 11)", "kN", OPTIONAL, gt=0),
-            "second_dynamic_load_rating_kN": _num("C of [set.second_bearing]", "kN", OPTIONAL, gt=0),
         },
         fill_defaults=False,
         exactly_one=(("arrangement", "facings"),),

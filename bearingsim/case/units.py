@@ -41,6 +41,8 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "per_mm": (1e3, "1/mm", "1/m"),
     "N_per_mm1_5": (1e3 ** 1.5, "N/mm^1.5", "N/m^1.5"),
     "rev_s": (2.0 * math.pi, "Hz", "rad/s"),       # a rotation frequency (shaft, cage) in Hz
+    "h": (3600.0, "h", "s"),
+    "Mrev": (1e6, "10^6 rev", "rev"),
 }
 
 
