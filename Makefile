@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_validity.py
 	$(PY) benchmarks/bench_dynamics.py
 	$(PY) benchmarks/bench_scale.py
+	$(PY) benchmarks/bench_sets.py
 
 clean:
 	rm -rf $(VENV) results build *.egg-info

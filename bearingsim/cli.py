@@ -47,11 +47,29 @@ def _plot_dir(path):
 
 # ------------------------------------------------------------------------------- commands
 def cmd_info(args):
-    print(report.info_text(load_case(args.case)))
+    case = load_case(args.case)
+    print(report.info_text(case))
+    if case.is_set:
+        from . import sets
+        print(sets.set_info_text(case))
     return 0
 
 
+def _static_set(case, json_path, plot_path):
+    from . import sets
+    sol = sets.solve_set_case(case)
+    print(sets.set_text(case, sol))
+    if json_path:
+        io.write_json(json_path, sets.set_to_dict(case, sol))
+        _wrote(json_path)
+    if plot_path:
+        sets.plot_set_static(sol, title=case.title, path=plot_path)
+        _wrote(plot_path)
+
+
 def _static(case, json_path, plot_path):
+    if case.is_set:
+        return _static_set(case, json_path, plot_path)
     sol = workflows.solve_case(case)
     assessment = workflows.assess_case(case, sol)
     print(report.static_text(case, sol, assessment))
@@ -99,6 +117,18 @@ def cmd_sweep(args):
 def cmd_study(args):
     case = load_case(args.case)
     budget.check_case(case, "study", args.output)
+    if case.is_set:
+        from . import sets
+        study = sets.study_set_case(case, throw=False)
+        _warn_failures(study.solution.result, "study states")
+        sets.write_set_study(args.output, case, study)
+        print(sets.set_study_text(case, study))
+        _wrote(args.output)
+        if args.plot:
+            p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
+            sets.plot_set_study(study, title=case.title, path=p)
+            _wrote(p)
+        return 0
     if args.workers is None and args.scheduler is None:
         study = workflows.study_case(case, throw=False, progress=True)
     else:

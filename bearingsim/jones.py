@@ -725,3 +725,13 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     if throw:
         raise_for(sol, "Jones batch solve")
     return sol
+
+
+# ----------------------------------------------------------- entry points for other solvers
+def state_validity(bearing, op: Operation, balls: BallState, psi, q, loads, defect_depth, rtol):
+    """Result code (:class:`RESULTS`) of a converged state re-checked from its per-ball output
+    (MODEL.md 3-4): finite, no inverted loaded contact, every ball and the ring in equilibrium
+    with ``loads``, deformations and ring displacement within bounds.  ``defect_depth``: the
+    total defect depth under each ball (H_outer + H_inner, (Z,)).  The checks of
+    :func:`solve_state`, for solvers that hold the balls themselves (:mod:`bearingsim.shaft`)."""
+    return _validity(bearing, op, balls, psi, q, loads, defect_depth, rtol)

@@ -849,6 +849,158 @@ def thrust_closed_form(geom: Geometry, Fa):
     return al, Q, dz
 
 
+# --------------------------------------------------------------------------------------------
+# A rigid shaft on N bearings (MODEL.md section 10)
+# --------------------------------------------------------------------------------------------
+def _set_frames(z, s):
+    """(G, L) = (M T, T^T M) of a bearing at axial position z with facing s."""
+    M = np.diag([1.0, s, s, 1.0, s])
+    T = np.eye(5)
+    T[0, 4] = z
+    T[1, 3] = -z
+    return M @ T, T.T @ M
+
+
+def solve_set(geoms, positions, facings, preloads, springs, loads, speed_rpm=0.0, control="outer",
+              cage_angle=0.0, offsets=None, tol=None):
+    """Shaft on N bearings, MODEL.md 10, written from the page alone: bearing k at z_k with
+    facing s_k, q_k = M_k T_k q_s + [0, 0, e_k, 0, 0] (rigid; e_k from the closed-form thrust
+    at P_k, :func:`thrust_closed_form`, unless ``offsets`` are given) or, for a spring bearing,
+    with its axial component replaced by its own approach v_k (one more unknown; u_k = (M T q)_z
+    - v_k, one more equation R_k,z = P_k).  Unknowns: every ball of every bearing, q_s, v;
+    scipy.optimize.root(hybr) with MINPACK's dense forward-difference Jacobian, from the
+    rigid-ring static solution (closed-form balls, hybr on the shaft unknowns).  Ball j of
+    bearing k sits at s_k (cage_angle + 2 pi j / Z) in its own frame.
+
+    Returns dict(q, v, u, e, R (N, 5) own-frame loads each bearing carries, per-bearing dicts
+    ``bearings`` (alpha_i, alpha_o, Q_i, Q_o), converged, residual (N), nfev)."""
+    N = len(geoms)
+    loads = np.asarray(loads, float).reshape(5)
+    springs = [bool(x) for x in springs]
+    P = np.asarray(preloads, float)
+    if offsets is None:
+        e = np.array([0.0 if (springs[k] or P[k] <= 0) else thrust_closed_form(geoms[k], P[k])[2]
+                      for k in range(N)])
+    else:
+        e = np.where(springs, 0.0, np.asarray(offsets, float))
+    fr = [_set_frames(positions[k], facings[k]) for k in range(N)]
+    sp_idx = [k for k in range(N) if springs[k]]
+    Lr = max(max(g.Ri for g in geoms), max(abs(z) for z in positions))
+    omega = 2.0 * np.pi * float(speed_rpm) / 60.0
+    psis = [facings[k] * (cage_angle + 2.0 * np.pi * np.arange(g.Z) / g.Z) for k, g in enumerate(geoms)]
+    Fscale = max(1.0, np.abs(loads[:3]).max(), np.abs(loads[3:]).max() / Lr, P.max(initial=0.0))
+    tol = 1e-9 * Fscale if tol is None else tol
+
+    def shaft_q(w):
+        return np.array([w[0] * UM, w[1] * UM, w[2] * UM, w[3] * UM / Lr, w[4] * UM / Lr])
+
+    def bearing_q(w):
+        qs = shaft_q(w)
+        out = []
+        for k in range(N):
+            q = fr[k][0] @ qs
+            if springs[k]:
+                q[2] = w[5 + sp_idx.index(k)] * UM
+            else:
+                q[2] += e[k]
+            out.append(q)
+        return out
+
+    def shaft_residual(Rs):
+        r = -loads.copy()
+        for k in range(N):
+            r += fr[k][1] @ Rs[k]
+        r[3:] /= Lr
+        extra = [Rs[k][2] - P[k] for k in sp_idx]
+        return np.concatenate([r, extra]) / KN
+
+    def reactions(geom, G, Hf, mom, psi):
+        R = ring_residual(geom, psi, G, Hf, mom, np.zeros(5))
+        R[3:] *= geom.Ri
+        return R
+
+    def static_f(w):
+        Rs = []
+        for k, q in enumerate(bearing_q(w)):
+            sb = static_balls(geoms[k], q, psis[k], np.zeros(geoms[k].Z))
+            Rs.append(reactions(geoms[k], sb["G"], sb["Hf"], sb["m"], psis[k]))
+        return shaft_residual(Rs)
+
+    n_w = 5 + len(sp_idx)
+    v0 = [thrust_closed_form(geoms[k], P[k])[2] / UM if P[k] > 0 else 0.0 for k in sp_idx]
+    starts = [np.concatenate([np.zeros(5), v0])]
+    for dz in (1e-6, 1e-5, -1e-5):
+        starts.append(np.concatenate([[0.0, 0.0, dz / UM, 0.0, 0.0], v0]))
+    best = None
+    for w0 in starts:
+        sol = optimize.root(static_f, w0, method="hybr", options=dict(xtol=1e-14, maxfev=5000))
+        res = float(np.abs(static_f(sol.x)).max() * KN)
+        if best is None or res < best[1]:
+            best = (sol.x, res)
+        if res <= tol:
+            break
+    w_static = best[0]
+
+    ctxs = []
+    for k, g in enumerate(geoms):
+        c0 = (g.fo - 0.5) * g.D
+        ctxs.append(_Ctx(g, psis[k], np.zeros(g.Z), np.zeros(5), omega, control, 1.0, 1.0,
+                         c0 * math.sin(g.alpha0), c0 * math.cos(g.alpha0), "hybr"))
+    nb = [2 * g.Z for g in geoms]
+    off = np.concatenate([[0], np.cumsum(nb)])
+
+    def full(u, cs):
+        w = u[off[-1]:]
+        r_all, Rs, sts = [], [], []
+        for k, q in enumerate(bearing_q(w)):
+            uk = np.concatenate([u[off[k]:off[k + 1]], _q_to_scaled(q, geoms[k].Ri)])
+            r, st = _evaluate(uk, cs[k])
+            r_all.append(r[:nb[k]])
+            R = r[nb[k]:] * KN
+            R[3:] *= geoms[k].Ri
+            Rs.append(R)
+            sts.append(st)
+        return np.concatenate(r_all + [shaft_residual(Rs)]), Rs, sts
+
+    def start_from(w, cs):
+        parts = []
+        for k, q in enumerate(bearing_q(w)):
+            parts.append(_full_start_from_static(cs[k], q)[:nb[k]])
+        return np.concatenate(parts + [w])
+
+    def root(u0, cs):
+        sol = optimize.root(lambda u: full(u, cs)[0], u0, method="hybr",
+                            options=dict(xtol=1e-13, maxfev=200 * (off[-1] + n_w)))
+        r = full(sol.x, cs)[0]
+        return sol.x, float(np.abs(r).max() * KN), int(sol.nfev)
+
+    u, res, nfev = root(start_from(w_static, ctxs), ctxs)
+    if not res <= tol and omega > 0.0:
+        for nsteps in (8, 32):
+            ub = None
+            for i in range(1, nsteps + 1):
+                cs = [_Ctx(c.geom, c.psi, c.H, c.loads, omega * i / nsteps, control, 1.0, 1.0,
+                           c.X1ref, c.X2ref, "hybr") for c in ctxs]
+                ub = start_from(w_static, cs) if ub is None else ub
+                ub, r1, n = root(ub, cs)
+                nfev += n
+            if r1 < res:
+                u, res = ub, r1
+            if res <= tol:
+                break
+    _, Rs, sts = full(u, ctxs)
+    w = u[off[-1]:]
+    qs = shaft_q(w)
+    v = np.zeros(N)
+    uu = np.zeros(N)
+    for j, k in enumerate(sp_idx):
+        v[k] = w[5 + j] * UM
+        uu[k] = (fr[k][0] @ qs)[2] - v[k]
+    return dict(q=qs, v=v, u=uu, e=e, R=np.array(Rs), converged=bool(res <= tol), residual=res,
+                nfev=nfev, bearings=[dict(alpha_i=st["alpha_i"], alpha_o=st["alpha_o"], Q_i=st["Q_i"],
+                                          Q_o=st["Q_o"]) for st in sts])
+
+
 if __name__ == "__main__":  # quick self-check against reference-data.md
     g = HARRIS_218
     hi = hertz_constant(g, g.alpha0, True, return_all=True)

@@ -88,6 +88,27 @@ radial_y_N = 0
 moment_x_Nm = 0
 moment_y_Nm = 0
 
+# [set]                                  # a shaft on several bearings (MODEL.md 10); omit for one
+# arrangement = "DB"                     # exactly one of these two: a named arrangement (DB, DF,
+# facings = [1, -1]                      #   DT, TBT, QBC, ...) or each bearing's facing +1 / -1
+# spacing_mm = 40                        # arrangement: distance between neighbours
+# positions_mm = [0, 40]                 # or each bearing's axial position (with facings)
+# preload_N = 2000                       # at most one of these three: the set preload (rigid),
+# preload_class = "light"                #   a class (light / medium / heavy),
+# preloads_N = [2000, 2000]              #   or each bearing's preload (must balance)
+# spring_bearings = [2]                  # 1-based: outer ring on springs (constant preload)
+# second_bearings = [2]                  # 1-based: bearings of [set.second_bearing]
+# [set.second_bearing]                   # the keys of [bearing], for those bearings
+# balls = 8
+# ball_diameter_mm = 6.746
+# pitch_diameter_mm = 28.5
+# inner_groove_curvature = 0.52
+# outer_groove_curvature = 0.52
+# diametral_clearance_mm = 0.0           # exactly one of these two:
+# free_contact_angle_deg = 0.0
+# design = "auto"
+# dynamic_load_rating_kN = 9.95          # its catalogue C: the set's ISO/TS 16281 life
+
 [defect]                                 # omit the section for a healthy bearing
 location = "outer"                       # or "inner" (turns with the inner ring) | "ball"
 center_deg = 0.0                         # raceway spall: azimuth of its centre (at t = 0)

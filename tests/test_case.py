@@ -839,6 +839,47 @@ def test_cwru_inner_and_ball_cases():
         np.testing.assert_allclose(float(s.length(c.bearing())), 0.1778e-3, rtol=1e-12)
 
 
+# ---------------------------------------------------------------------------------------------
+# [set]: a shaft on several bearings (MODEL.md 10)
+# ---------------------------------------------------------------------------------------------
+def _set_case(set_text, extra=""):
+    base = (CASES_DIR / "harris218_db_light.toml").read_text()
+    head = base.split("[set]")[0]
+    return head + "[set]\n" + set_text + "\n" + extra
+
+
+@pytest.mark.parametrize("set_text, message", [
+    ('arrangement = "BD"\nspacing_mm = 40', "set.arrangement = 'BD' is not a known arrangement: did you mean 'DB'?"),
+    ('arrangement = "DB"', "set.arrangement needs set.spacing_mm"),
+    ('facings = [1, -1]\npositions_mm = [0, 10]', "set.positions_mm: bearings 1 and 2 overlap"),
+    ('facings = [1, 2]\npositions_mm = [0, 40]', "set.facings = [1, 2]: each facing must be +1 or -1"),
+    ('arrangement = "DT"\nspacing_mm = 40\npreload_N = 1000', "set.preload_N = 1000: every bearing of the set faces +1"),
+    ('facings = [1, -1]\npositions_mm = [0, 40]\npreloads_N = [1000, 2000]', "set.preloads_N = [1000, 2000]: the preloads do not balance"),
+    ('facings = [1, -1, -1]\npositions_mm = [0, 40, 300]\npreloads_N = [2000, 1000, 1000]\nspring_bearings = [1, 2]',
+     "set.spring_bearings: bearings 1 and 2 form one pair"),
+    ('arrangement = "DB"\nspacing_mm = 40\npreload_N = 100\npreload_class = "light"', "give at most one of preload_N, preload_class, preloads_N"),
+    ('arrangement = "DB"\nspacing_mm = 40\npreload_class = "hevy"', "set.preload_class"),
+])
+def test_bad_set_inputs_name_the_key(set_text, message):
+    with pytest.raises(CaseError) as e:
+        parse_case(_set_case(set_text))
+    assert message in str(e.value)
+
+
+def test_set_cases_build_their_sets():
+    from bearingsim import shaft
+    c = load_case(CASES_DIR / "harris218_db_heavy.toml")
+    s = c.bearing_set()
+    np.testing.assert_array_equal(np.asarray(s.facings), [1.0, -1.0])
+    np.testing.assert_allclose(np.asarray(s.positions), [0.0, 0.04])
+    np.testing.assert_allclose(np.asarray(s.preload), 0.012 * float(shaft.static_axial_capacity(s.bearings[0])))
+    sp = load_case(CASES_DIR / "spindle_tbt_spring.toml").bearing_set()
+    np.testing.assert_array_equal(np.asarray(sp.springs), [0, 0, 0, 1])
+    sp.check_balance()
+    rotor = load_case(CASES_DIR / "cwru_rotor.toml").bearing_set()
+    assert [b.n_balls for b in rotor.bearings] == [9, 8]
+    np.testing.assert_allclose(float(rotor.bearings[1].ball_diameter), 0.2656 * 25.4e-3, rtol=1e-5)
+
 # ----------------------------------------------------------------------------------------------
 # shoulders, design, limits, dynamic load rating (issue 21)
 # ----------------------------------------------------------------------------------------------

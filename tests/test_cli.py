@@ -110,3 +110,20 @@ def test_help(argv, capsys):
     with pytest.raises(SystemExit) as e:
         cli.main(argv)
     assert e.value.code == 0 and "bearingsim" in capsys.readouterr().out
+
+
+def test_static_and_info_on_a_set(tmp_path, capsys):
+    """`bearingsim static` and `info` on a set case (MODEL.md 10): per bearing the axial load,
+    the lift-off margin and every ball; the JSON record and the polar plot are written."""
+    import json
+    js, png = tmp_path / "set.json", tmp_path / "set.png"
+    assert cli.main(["static", "harris218_db_medium", "--json", str(js), "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "bearing 2: z = 40.00 mm, facing -1" in out and "lift-off margin" in out
+    rec = json.loads(js.read_text())
+    assert rec["result"] == 0 and len(rec["bearings"]) == 2 and png.stat().st_size > 0
+    # the shaft's axial equilibrium from the record: R1z - R2z = Fz
+    Fz = rec["bearings"][0]["loads"][2] - rec["bearings"][1]["loads"][2]
+    assert abs(Fz - 2000.0) < 1e-6
+    assert cli.main(["info", "spindle_tbt_spring"]) == 0
+    assert "bearing 4: z =   400.00 mm, facing -1" in capsys.readouterr().out

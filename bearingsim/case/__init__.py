@@ -189,6 +189,45 @@ class Case:
             "dynamic_load_rating": self.si("bearing").get("dynamic_load_rating"),
         }
 
+    @property
+    def is_set(self) -> bool:
+        """True when the case describes a shaft on several bearings ([set], MODEL.md 10)."""
+        return "set" in self.data
+
+    def _bearing_from(self, path: str):
+        from ..geometry import Bearing
+        b = self.si(path)
+        rings = self._material("material")
+        balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
+        args = (b["balls"], b["ball_diameter"], b["pitch_diameter"], b["inner_groove_curvature"],
+                b["outer_groove_curvature"])
+        design = b.get("design", "auto")
+        if "diametral_clearance" in b:
+            return Bearing.from_clearance(*args, b["diametral_clearance"], ball_material=balls,
+                                          ring_material=rings,
+                                          design="deep_groove" if design == "auto" else design)
+        return Bearing(*args, b["free_contact_angle"], balls, rings, design=design)
+
+    def bearing_set(self):
+        """:class:`bearingsim.shaft.BearingSet` of [set] (SI; preload classes resolved), or None."""
+        if not self.is_set:
+            return None
+        from ..shaft import BearingSet, preload_class_force
+        from .sets import set_layout
+        s = self.data["set"]
+        first = self.bearing()
+        second = self._bearing_from("set.second_bearing") if "second_bearing" in s else None
+        facings, z, pre, cls, springs, seconds = set_layout(s, float(self.data["bearing"]["ball_diameter_mm"]))
+        n = len(facings)
+        bearings = [second if k in seconds else first for k in range(n)]
+        if pre is None:
+            P = float(s.get("preload_N", 0.0)) if cls is None else preload_class_force(first, cls)
+            plus = sum(1 for f in facings if f > 0)
+            minus = n - plus
+            pre = [0.0] * n if P == 0.0 else [P / (plus if f > 0 else minus) for f in facings]
+        return BearingSet(bearings, [x * 1e-3 for x in z], facings, [float(p) for p in pre],
+                          [k in springs for k in range(n)])
+
     def operation(self):
         """:class:`bearingsim.Operation` (speed in rad/s via ``Operation.from_rpm``)."""
         from ..kinematics import Operation

@@ -182,6 +182,26 @@ _MATERIAL_KEYS = {
                           "kg_m3", 7850.0, gt=0),
 }
 
+_BEARING_KEYS = {
+            "balls": _int("number of balls Z", ge=3),
+            "ball_diameter_mm": _num("ball diameter D", "mm", gt=0),
+            "pitch_diameter_mm": _num("pitch diameter d_m", "mm", gt=0),
+            "inner_groove_curvature": _num("inner groove curvature ratio f_i = r_i / D", "", gt=0.5, lt=1.0),
+            "outer_groove_curvature": _num("outer groove curvature ratio f_o = r_o / D", "", gt=0.5, lt=1.0),
+            "free_contact_angle_deg": _num("free (unloaded) contact angle alpha_0", "deg", OPTIONAL,
+                                           ge=0, le=80),
+            "diametral_clearance_mm": _num("diametral clearance P_d; then cos alpha_0 = 1 - P_d / (2 B D), "
+                                           "B = f_i + f_o - 1", "mm", OPTIONAL, ge=0),
+    "design": _enum("bearing design, for its shoulders and its life: \"deep_groove\" (full shoulders on "
+                    "both sides of both rings, nominal contact angle 0), \"angular_contact\" (one high and "
+                    "one low shoulder per ring: axial load in +z only), \"auto\" (deep groove when given "
+                    "by diametral_clearance_mm or alpha_0 = 0, else angular contact)",
+                    ("auto", "deep_groove", "angular_contact"), "auto"),
+    "dynamic_load_rating_kN": _num("basic dynamic load rating C (catalogue); gives the ISO/TS 16281 "
+                                   "rating life L10r in `bearingsim static` (of each bearing and of the "
+                                   "set for a [set] case)", "kN", OPTIONAL, gt=0),
+}
+
 #: section path -> Section.  Order is the order of the docs and of emitted TOML.
 SCHEMA: dict[str, Section] = {
     "": Section(
@@ -194,24 +214,7 @@ SCHEMA: dict[str, Section] = {
     ),
     "bearing": Section(
         "Geometry of the bearing (MODEL.md section 2).",
-        {
-            "balls": _int("number of balls Z", ge=3),
-            "ball_diameter_mm": _num("ball diameter D", "mm", gt=0),
-            "pitch_diameter_mm": _num("pitch diameter d_m", "mm", gt=0),
-            "inner_groove_curvature": _num("inner groove curvature ratio f_i = r_i / D", "", gt=0.5, lt=1.0),
-            "outer_groove_curvature": _num("outer groove curvature ratio f_o = r_o / D", "", gt=0.5, lt=1.0),
-            "free_contact_angle_deg": _num("free (unloaded) contact angle alpha_0", "deg", OPTIONAL,
-                                           ge=0, le=80),
-            "diametral_clearance_mm": _num("diametral clearance P_d; then cos alpha_0 = 1 - P_d / (2 B D), "
-                                           "B = f_i + f_o - 1", "mm", OPTIONAL, ge=0),
-            "design": _enum("bearing design, for its shoulders and its life: \"deep_groove\" (full shoulders on "
-                            "both sides of both rings, nominal contact angle 0), \"angular_contact\" (one high and "
-                            "one low shoulder per ring: axial load in +z only), \"auto\" (deep groove when given "
-                            "by diametral_clearance_mm or alpha_0 = 0, else angular contact)",
-                            ("auto", "deep_groove", "angular_contact"), "auto"),
-            "dynamic_load_rating_kN": _num("basic dynamic load rating C (catalogue); gives the ISO/TS 16281 "
-                                           "rating life L10r in `bearingsim static`", "kN", OPTIONAL, gt=0),
-        },
+        dict(_BEARING_KEYS),
         required=True,
         exactly_one=(("free_contact_angle_deg", "diametral_clearance_mm"),),
         notes=(
@@ -317,6 +320,55 @@ SCHEMA: dict[str, Section] = {
             "center_deg not with it",
             "depth_mm < bearing.ball_diameter_mm",
         ),
+    ),
+    "set": Section(
+        "Optional: a rigid shaft on several bearings (MODEL.md section 10).  [bearing] is every "
+        "bearing of the set (unless [set.second_bearing]); [load] acts on the shaft at z = 0 in the "
+        "shaft frame; bearing k (k = 1..N by increasing position) faces +1 (carries +Fz, the bearing "
+        "of MODEL.md 1) or -1 (mirrored).  Either an arrangement name with a spacing, or explicit "
+        "facings and positions.",
+        {
+            "arrangement": _str("named arrangement, bearings by increasing z: DB (back to back, "
+                                "facings +1 -1), DF (face to face, -1 +1), DT (tandem, +1 +1), TBT, "
+                                "TFT, TT, QBC, QFC, QBT, QFT, QT", OPTIONAL),
+            "facings": Key("numbers", "explicit facing of each bearing, +1 or -1", "", OPTIONAL),
+            "spacing_mm": _num("distance between neighbouring bearings of an arrangement", "mm",
+                               OPTIONAL, gt=0),
+            "positions_mm": Key("numbers", "axial position z_k of each bearing's inner groove-centre "
+                                "plane (default for an arrangement: 0, spacing, 2 spacing, ...)", "mm",
+                                OPTIONAL),
+            "preload_N": _num("preload of the set (rigid): each bearing of a facing group carries "
+                              "preload / (bearings facing that way) at standstill", "N", OPTIONAL, ge=0),
+            "preload_class": _enum("preload class instead of preload_N: light / medium / heavy = "
+                                   "0.3 / 0.6 / 1.2 % of the bearing's static axial capacity C_0a "
+                                   "(p_max = 4.2 GPa at standstill)", ("light", "medium", "heavy"),
+                                   OPTIONAL),
+            "preloads_N": Key("numbers", "preload of each bearing (N): its thrust at standstill "
+                              "(rigid), or its constant spring force (spring_bearings)", "N", OPTIONAL),
+            "spring_bearings": Key("numbers", "bearings (1-based, by position) whose outer ring floats "
+                                   "on a spring: constant preload", "", OPTIONAL),
+            "second_bearings": Key("numbers", "bearings (1-based) that are [set.second_bearing] "
+                                   "instead of [bearing]", "", OPTIONAL),
+        },
+        fill_defaults=False,
+        exactly_one=(("arrangement", "facings"),),
+        notes=(
+            "an arrangement name must be known (a near miss is suggested); facings are +1 or -1",
+            "an arrangement needs spacing_mm or positions_mm; facings need positions_mm; one position "
+            "per bearing, increasing, neighbours at least one ball diameter apart (else the bearings "
+            "overlap)",
+            "at most one of preload_N, preload_class, preloads_N; a set preload needs bearings facing "
+            "both ways; per-bearing preloads must balance: sum of facing x preload = 0",
+            "spring_bearings: valid indices, not every bearing, never both bearings of one pair "
+            "(neighbours closer than 3 ball diameters), each with a preload > 0",
+        ),
+    ),
+    "set.second_bearing": Section(
+        "Geometry of the bearings listed in [set] second_bearings (e.g. the fan-end bearing of a "
+        "two-support rotor); the keys of [bearing].",
+        dict(_BEARING_KEYS),
+        fill_defaults=False,
+        exactly_one=(("free_contact_angle_deg", "diametral_clearance_mm"),),
     ),
     "sweep": Section(
         "Cage-angle sweep (MODEL.md section 6).",

@@ -12,6 +12,7 @@ import math
 
 from ..errors import InputError
 from .messages import fmt_num, fmt_value, kind_of, suggest
+from .sets import set_problems
 from .schema import (OPTIONAL, REQUIRED, SCHEMA, TYPE_NAMES, Key, all_keys, join_key, lookup, split_key,
                      subsections)
 from .units import from_si, to_si
@@ -202,6 +203,7 @@ def _free_contact_angle_deg(b: dict) -> float | None:
 def _cross_checks(data: dict, problems: list[str], raw: dict | None = None) -> None:
     """Checks between keys; each runs only when the keys it needs are individually valid.
     Values are shown as written in ``raw`` (the file) when given there."""
+    set_problems(data, problems)
     b = data.get("bearing", {})
     has = lambda d, *ks: all(k in d for k in ks)  # noqa: E731
 
