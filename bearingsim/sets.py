@@ -135,6 +135,12 @@ def set_text(case, sol) -> str:
              "set stiffness: " + ", ".join(f"{n} {K[i, i] * s:.2f} {u}" for n, i, u, s in K_DIAG), ""]
     margin = np.asarray(sol.lift_off_margin)
     ratio = np.asarray(sol.ball_load_ratio)
+    from .limits import contact_limits
+    settings = case.limits_settings()
+    pl, mu = settings["pressure_limit"], settings["friction_coefficient"]
+    bset = case.bearing_set()
+    limits = [contact_limits(sb, bb, case.operation().control, pressure_limit=pl, friction_coefficient=mu)
+              for sb, bb in zip(sol.bearings, bset.bearings)]
     lives = set_lives_hours(case, sol)
     if lives is not None:
         lines.insert(4, "ISO/TS 16281 L10r life: set " + f"{lives[1]:.4g} h; "
@@ -148,6 +154,12 @@ def set_text(case, sol) -> str:
                      + ("-" if not np.isfinite(margin[k]) else f"{margin[k]:.3f}")
                      + f" (axial load / preload), min/max ball load {ratio[k]:.3f}, p_max "
                      f"{float(b.max_pressure) / 1e6:.0f} MPa")
+        lim = limits[k]
+        lines.append(f"  limits: friction coefficient raceway control needs {float(np.max(lim.friction_inner)):.4f} "
+                     f"inner / {float(np.max(lim.friction_outer)):.4f} outer (available {mu:g}), contacts over "
+                     f"{pl / 1e9:g} GPa: {int(np.sum(np.asarray(lim.overpressure)))}, ellipse truncated by a "
+                     f"shoulder: {int(np.sum(np.asarray(lim.truncated)))}, centre over a shoulder: "
+                     f"{int(np.sum(np.asarray(lim.over_shoulder)))}")
         lines.append("   ball  azimuth_deg  alpha_i_deg  alpha_o_deg    Q_i_N    Q_o_N  p_max_i_MPa")
         for j in range(az.size):
             lines.append(f"  {j:5d} {az[j]:12.2f} {np.degrees(float(b.alpha_inner[j])):12.3f} "
