@@ -451,9 +451,12 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
     ring_bad = jnp.max(jnp.abs((R - F) * w)) > tol
     inverted = jnp.any(((st.Q_inner > 0.0) & (ci <= 0.0)) | ((st.Q_outer > 0.0) & (co <= 0.0)))
     # an angular contact bearing (low shoulders, MODEL.md 11) carries axial load in +z only: no
-    # inner contact may push its ball to -z (the geometric shoulder checks, contact centres and
-    # ellipses against the groove edges, are bearingsim.limits: flags, refused by the workflows)
-    reversed_ball = jnp.any((st.Q_inner > 0.0) & (st.Q_inner * si < -tol))
+    # loaded contact may lie beyond its low shoulder (a contact a few degrees below 0 under a
+    # combined load is still on the groove, inside the low shoulder angle); the geometric
+    # ellipse checks against the groove edges are bearingsim.limits: flags, refused by the workflows
+    low = bearing.shoulders
+    reversed_ball = jnp.any(((st.Q_inner > 0.0) & (si < -jnp.sin(low[..., 1:2]))) |
+                            ((st.Q_outer > 0.0) & (so < -jnp.sin(low[..., 3:4]))))
     low_shoulder = bearing.angular_contact & (reversed_ball | (F[2] < 0.0))
     d_lim = DEFORMATION_LIMIT * D
     deform = jnp.maximum(jnp.where(st.Q_inner > 0.0, st.delta_inner, 0.0),
