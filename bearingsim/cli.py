@@ -128,6 +128,9 @@ def cmd_study(args):
             p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
             sets.plot_set_study(study, title=case.title, path=p)
             _wrote(p)
+            p = _plot_dir(args.plot) / ("limits_set_" + study.parameter.replace(".", "_") + ".png")
+            sets.plot_set_limits(case, study, title=case.title, path=p)
+            _wrote(p)
         return 0
     if args.workers is None and args.scheduler is None:
         study = workflows.study_case(case, throw=False, progress=True)

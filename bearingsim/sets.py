@@ -15,7 +15,8 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["solve_set_case", "study_set_case", "SetStudy", "set_text", "set_info_text",
-           "set_study_text", "set_to_dict", "write_set_study", "plot_set_static", "plot_set_study"]
+           "set_study_text", "set_to_dict", "write_set_study", "plot_set_static", "plot_set_study",
+           "study_limits", "plot_set_limits"]
 
 DOF = (("x", "um", 1e6), ("y", "um", 1e6), ("axial", "um", 1e6), ("tilt_x", "mrad", 1e3),
        ("tilt_y", "mrad", 1e3))
@@ -265,6 +266,66 @@ def plot_set_study(study: SetStudy, title="", path=None):
     a2.set_ylabel("set stiffness")
     a2.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def study_limits(case, study: SetStudy) -> dict:
+    """Per bearing over the study's values (arrays (values, bearings)): the largest p_max over
+    the pressure limit, the largest friction coefficient raceway control needs over the available
+    one, the smallest contact-ellipse margin to a groove edge (deg; negative: truncated), the
+    lift-off margin (axial load / preload)."""
+    from .limits import contact_limits
+    settings = case.limits_settings()
+    bset = case.bearing_set()
+    sol = study.solution
+    out = {"pressure": [], "friction": [], "edge_deg": []}
+    for sb, bb in zip(sol.bearings, bset.bearings):
+        lim = contact_limits(sb, bb, case.operation().control, pressure_limit=settings["pressure_limit"],
+                             friction_coefficient=settings["friction_coefficient"])
+        out["pressure"].append(np.max(np.maximum(np.asarray(lim.pressure_ratio_inner),
+                                                 np.asarray(lim.pressure_ratio_outer)), axis=-1))
+        out["friction"].append(np.max(np.asarray(lim.friction_ratio), axis=-1))
+        loaded_i, loaded_o = np.asarray(sb.Q_inner) > 0.0, np.asarray(sb.Q_outer) > 0.0
+        edge = [np.where(loaded_i, np.asarray(v), np.inf) for v in (lim.edge_high_inner, lim.edge_low_inner)] + \
+               [np.where(loaded_o, np.asarray(v), np.inf) for v in (lim.edge_high_outer, lim.edge_low_outer)]
+        e = np.min(np.stack([np.min(v, axis=-1) for v in edge]), axis=0)
+        out["edge_deg"].append(np.degrees(np.where(np.isfinite(e), e, np.nan)))
+    res = {k: np.stack(v, axis=-1) for k, v in out.items()}
+    res["lift_off"] = np.asarray(sol.lift_off_margin)
+    return res
+
+
+def plot_set_limits(case, study: SetStudy, title="", path=None):
+    """The limits diagram over the study's parameter (speed, preload, ...): per bearing the peak
+    pressure over its limit, the friction raceway control needs over the available, the smallest
+    ellipse-to-edge margin and the lift-off margin; the shaded side of each line is out of margin."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    lim = study_limits(case, study)
+    v = study.values
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
+    panels = (("pressure", "p_max / pressure limit (-)", 1.0, "above"),
+              ("friction", "friction needed / available (-)", 1.0, "above"),
+              ("edge_deg", "smallest ellipse margin to a groove edge (deg)", 0.0, "below"),
+              ("lift_off", "lift-off margin: axial load / preload (-)", 0.0, "below"))
+    for ax, (key, label, bound, bad) in zip(axes.ravel(), panels):
+        y = np.asarray(lim[key], float)
+        y = y[:, None] if y.ndim == 1 else y
+        for k in range(y.shape[1]):
+            ax.plot(v, y[:, k], "o-", ms=3, label=f"bearing {k + 1}")
+        ax.axhline(bound, color="0.3", lw=0.8, ls="--")
+        lo, hi = ax.get_ylim()
+        if bad == "above":
+            ax.axhspan(bound, max(hi, bound * 1.05 + 1e-9), color="#d62728", alpha=0.08)
+        else:
+            ax.axhspan(min(lo, bound - 1e-9), bound, color="#d62728", alpha=0.08)
+        ax.set_ylabel(label, fontsize=9)
+        ax.legend(fontsize=7)
+    for ax in axes[1]:
+        ax.set_xlabel(f"{study.parameter} [{study.unit}]")
+    fig.suptitle((title + "\n" if title else "") + "limits over " + study.parameter, fontsize=10)
     fig.tight_layout()
     return _save(fig, path)
 
