@@ -60,7 +60,7 @@ from .case import check_sampling
 from .case.units import from_si, to_si
 from .errors import BearingsimError, InputError, ResultCode
 
-__all__ = ["ChunkPlan", "simulate_chunk", "serial_imap", "pit_depths_batch", "CLASSES", "SPLITS", "transfer_paths", "item_background", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
+__all__ = ["ChunkPlan", "CHUNK_FIELDS", "simulate_chunk", "serial_imap", "pit_depths_batch", "CLASSES", "SPLITS", "transfer_paths", "item_background", "class_counts", "item_locations", "slots_of", "LABEL_FIELDS", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels",
            "item_seeds", "make_dataset", "partial_path", "pit_depths", "result_messages"]
 
 #: label field -> (numpy dtype, unit)
@@ -490,7 +490,8 @@ def _chunk_file(folder: Path, k: int) -> Path:
 
 _BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
                       "background_knock_rate_Hz")
-_CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
+#: the per-item label fields a chunk file carries (besides index and signals)
+CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
                  "pass_amplitude_cv_percent", "signal_gain", "snr_dB") + _BACKGROUND_FIELDS
 
 
@@ -556,7 +557,7 @@ def _assemble(case, ds, path, folder, lab, T, ts, fs, duration, it, sub, scheme,
     for k in range(chunks):
         with np.load(_chunk_file(folder, k)) as c:
             idx = c["index"]
-            for name in _CHUNK_FIELDS:
+            for name in CHUNK_FIELDS:
                 lab[name][idx] = c[name]
     lab["ftf_Hz"] = lab["bpfo_Hz"] / Z
     lab["shaft_Hz"] = from_si(to_si(lab["speed_rpm"], "rpm"), "rev_s")

@@ -107,8 +107,7 @@ def cheap_chunk(plan, k):
     T = int(round(plan.duration * plan.fs))
     z = np.zeros(idx.size)
     return dict(index=idx, signals=np.zeros((idx.size, T), np.float32), result=np.zeros(idx.size, np.int32),
-                pass_jitter_percent=z, pass_delay_sd_percent=z, pass_amplitude_cv_percent=z,
-                bpfo_Hz=z, bpfi_Hz=z, bsf_Hz=z)
+                **{{k: z for k in dsm.CHUNK_FIELDS if k != "result"}})
 
 class Cheap:
     def __init__(self, r): self.r = r
