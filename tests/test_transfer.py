@@ -1,7 +1,7 @@
 """The sim-to-real transfer benchmark (issue 20): the metrics against hand counts, and the floor
 of classifiers trained on the shipped spec's simulated data only, tested on the real CWRU
 records of ../shared/realdata (skipped with the reason when absent).  The full-size figures
-(1000 training items) are benchmarks/bench_transfer.py's; this test trains on a small set."""
+(1000 training items) are benchmarks/bench_transfer.py's; this test trains on a small set (120 items)."""
 from pathlib import Path
 
 import numpy as np
@@ -18,10 +18,11 @@ DATA = find_realdata(REPO)
 needs_data = pytest.mark.skipif(DATA is None, reason="the real CWRU records (../shared/realdata) are not here: "
                                 "the transfer benchmark needs them (see ../shared/realdata/README.md)")
 
-#: floors of the small-set test (160 items; the benchmark's 1000 items do better): balanced
+#: floors of the small-set test (120 items: measured 0.669 RF, 0.661 LR; the ceiling the two
+#: signature-less records leave is 0.67, the issue measured 0.55-0.61 before): balanced
 #: accuracy over the six records' windows, and the two unambiguous records (the rig's 0.007 in
 #: outer and inner race faults: strong lines at their own frequency)
-FLOOR_BALANCED = 0.50
+FLOOR_BALANCED = 0.60
 FLOOR_CLEAR = 0.90
 
 
@@ -75,7 +76,7 @@ def test_classifiers_trained_on_simulation_recognise_real_faults(tmp_path):
     pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")
     spec = load_case("dataset_cwru_4class")
     spec = (spec.with_value("dynamics.sample_rate_Hz", 12000).with_value("dataset.duration_s", 0.2)
-            .with_value("dataset.count", 160))
+            .with_value("dataset.count", 120))
     s = dataset_case(spec, tmp_path / "train.h5")
     assert s.failed == 0
     reports = transfer_benchmark(tmp_path / "train.h5", DATA, fault_orders(spec.bearing()), 0.2)
