@@ -289,6 +289,24 @@ def _closed_form_balls(pb: _Problem, qz, defect_free=False):
     return x0 / UM, d_c
 
 
+def newton_step_status(out, c, ok, t, first, finite, tol, maxit, ls_steps=_LS_STEPS):
+    """The bookkeeping of one damped Newton step (the Jones solve's and the shaft solve's):
+    ``out`` (the accepted or kept iterate, with its merit ``m``) gets the next step length ``t``
+    (full after an accepted step, halved after a rejected one), the iteration and line-search
+    counters ``it`` and ``ls`` from the previous carry ``c``, and ``code``: 0 converged (or
+    stalled within 1e3 x tol), 1 out of iterations, 2 a non-finite first step, 3 stalled,
+    -1 go on."""
+    out.update(t=jnp.where(ok, 1.0, 0.5 * t), it=jnp.where(ok, c["it"] + 1, c["it"]),
+               ls=jnp.where(ok, 0, c["ls"] + 1))
+    conv = out["m"] <= tol
+    stalled = out["ls"] >= ls_steps
+    code = jnp.where(first & ~finite, 2,
+           jnp.where(conv | (stalled & (out["m"] <= 1e3 * tol)), 0,
+           jnp.where(stalled, 3, jnp.where(out["it"] >= maxit, 1, -1))))
+    out["code"] = code.astype(jnp.int32)
+    return out
+
+
 def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
     """Damped Newton from (qz0, Y0, Yu0): one while loop whose every pass evaluates one trial
     point (the first pass: the start); an accepted trial brings the next direction.
@@ -334,15 +352,7 @@ def _newton(pb: _Problem, qz0, Y0, Yu0, d_c, d_cu, maxit, tol):
         new = dict(qz=qz, Y=Y, dq=dq, dY=dY, m=m, sn=sn, jac=jac)
         if defect:
             new.update(Yu=Yu, dYu=dYu)
-        out = sel(new, {k: c[k] for k in new})
-        out.update(t=jnp.where(ok, 1.0, 0.5 * t), it=jnp.where(ok, c["it"] + 1, c["it"]),
-                   ls=jnp.where(ok, 0, c["ls"] + 1))
-        conv = out["m"] <= tol
-        stalled = out["ls"] >= _LS_STEPS
-        code = jnp.where(first & ~finite, 2,
-               jnp.where(conv | (stalled & (out["m"] <= 1e3 * tol)), 0,
-               jnp.where(stalled, 3, jnp.where(out["it"] >= maxit, 1, -1))))
-        out["code"] = code.astype(jnp.int32)
+        out = newton_step_status(sel(new, {k: c[k] for k in new}), c, ok, t, first, finite, tol, maxit)
         if not defect:
             out.update(Yu=c["Yu"], dYu=c["dYu"])
         return out

@@ -54,7 +54,7 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
 from .defect import as_defects, contact_depths
 from .errors import InputError
 from .hertz import contact_ellipse, power_eval, stiffness_curve
-from .jones import RESULTS, JonesSolution, initial_displacement, raise_for, state_validity
+from .jones import RESULTS, JonesSolution, initial_displacement, newton_step_status, raise_for, state_validity
 from .kinematics import Operation
 from .xla import jit
 
@@ -581,15 +581,7 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
         new = dict(xz=xz, Y=Ys, Yu=Yus, dx=_cap(dx, _RING_CAP), dY=dYs, dYu=dYus, m=m, sn=sn,
                    jac=jacs)
         out = jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, {k: c[k] for k in new})
-        out.update(t=jnp.where(ok, 1.0, 0.5 * t), it=jnp.where(ok, c["it"] + 1, c["it"]),
-                   ls=jnp.where(ok, 0, c["ls"] + 1))
-        conv = out["m"] <= tol
-        stalled = out["ls"] >= _LS_STEPS
-        code = jnp.where(first & ~finite, 2,
-               jnp.where(conv | (stalled & (out["m"] <= 1e3 * tol)), 0,
-               jnp.where(stalled, 3, jnp.where(out["it"] >= maxit, 1, -1))))
-        out["code"] = code.astype(jnp.int32)
-        return out
+        return newton_step_status(out, c, ok, t, first, finite, tol, maxit, _LS_STEPS)
 
     init = dict(xz=xz0, Y=list(Y0), Yu=list(Yu0), dx=jnp.zeros_like(xz0),
                 dY=[jnp.zeros_like(y) for y in Y0], dYu=[jnp.zeros_like(y) for y in Y0],
