@@ -198,6 +198,8 @@ def plot_transfer(reports, path=None):
         recs = list(r.per_record)
         acc = [r.per_record[q][1] for q in recs]
         ax.barh(range(len(recs)), acc, color=["#2ca02c" if a >= 0.7 else "#d62728" for a in acc])
+        for i, a in enumerate(acc):             # the value, also for a bar of length 0
+            ax.text(min(a, 0.86) + 0.02, i, f"{a:.2f}", va="center", fontsize=8)
         ax.set_yticks(range(len(recs)), [q.replace("cwru_", "").replace("_0hp", "") for q in recs], fontsize=8)
         ax.set_xlim(0.0, 1.0)
         ax.axvline(0.7, color="0.5", lw=0.8, ls="--")

@@ -85,3 +85,12 @@ def test_classifiers_trained_on_simulation_recognise_real_faults(tmp_path):
         assert r.balanced_accuracy >= FLOOR_BALANCED, msg
         for rec in ("cwru_OR007_6_0hp_12k", "cwru_IR007_0hp_12k"):
             assert r.per_record[rec][1] >= FLOOR_CLEAR, msg
+
+
+def test_plot_transfer_writes_the_figure(tmp_path):
+    from bearingsim.plots_signal import plot_transfer
+    y = np.array([0, 1, 1, 2, 3])
+    w = Windows(np.zeros((5, 2)), y, np.array(["n", "o1", "o2", "i", "b"]), np.ones(5))
+    reps = [evaluate(_Fixed([0, 1, 0, 2, 0]), name, w, w) for name in ("a", "b")]
+    out = plot_transfer(reps, path=tmp_path / "t.png")
+    assert out is not None and (tmp_path / "t.png").stat().st_size > 10_000
