@@ -1,8 +1,18 @@
 """Shared fixtures and independent checks (numpy re-derivations of MODEL.md section 4)."""
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import bearingsim as bs
+
+# Hypothesis draws the same examples on every run (CI must never turn red at random): the
+# "ci" profile is derandomized and keeps no example database.  HYPOTHESIS_PROFILE=explore draws
+# fresh examples, for a person hunting new failures on purpose.
+settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True)
+settings.register_profile("explore", derandomize=False, deadline=None, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 DEG = np.pi / 180
 
@@ -48,6 +58,15 @@ def ball_equilibrium_error(b, sol, op):
     """Largest ball equilibrium residual relative to the largest outer contact load."""
     _, _, _, r1, r2 = _ball_forces(b, sol, op)
     return max(np.max(np.abs(r1)), np.max(np.abs(r2))) / max(float(np.max(np.asarray(sol.Q_outer))), 1.0)
+
+
+def beyond_low_shoulder(b, sol):
+    """True when a loaded contact of an angular contact bearing lies at or beyond its low shoulder
+    (MODEL.md 11), from the reported per-ball angles alone."""
+    sh = np.asarray(b.shoulders)
+    Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
+    ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
+    return bool(np.any((Qi > 0) & (np.sin(ai) <= -np.sin(sh[1]))) or np.any((Qo > 0) & (np.sin(ao) <= -np.sin(sh[3]))))
 
 
 def inverted_contacts(sol):
