@@ -18,12 +18,52 @@ import threading
 import time
 from pathlib import Path
 
-import numpy as np
-
-from . import budget, io, report, workflows
-from .case import load_case
-from .case.units import from_si
+from . import budget
 from .errors import BearingsimError, OutputError
+
+
+class _Lazy:
+    """A module imported at its first use: ``bearingsim --help`` does not load JAX (the import
+    statements stay visible to tests/test_architecture.py)."""
+
+    def __init__(self, load):
+        self._load = load
+
+    def __getattr__(self, attr):
+        return getattr(self._load(), attr)
+
+
+def _io():
+    from . import io as m
+    return m
+
+
+def _report():
+    from . import report as m
+    return m
+
+
+def _workflows():
+    from . import workflows as m
+    return m
+
+
+def _numpy():
+    import numpy as m
+    return m
+
+
+np, io, report, workflows = _Lazy(_numpy), _Lazy(_io), _Lazy(_report), _Lazy(_workflows)
+
+
+def load_case(*args, **kwargs):
+    from .case import load_case as f
+    return f(*args, **kwargs)
+
+
+def from_si(*args, **kwargs):
+    from .case.units import from_si as f
+    return f(*args, **kwargs)
 
 
 def _wrote(*paths):
@@ -43,6 +83,17 @@ def _plot_dir(path):
     d = Path(path)
     d.mkdir(parents=True, exist_ok=True)
     return d
+
+
+def _compiling(case, command):
+    """Say so before a command compiles with a cold cache ("compiling, first run only: ~N s")."""
+    line = budget.compile_notice(case, command)
+    if line:
+        print(line, flush=True)
+
+
+def _compiled(case, command):
+    budget.mark_compiled(case, command)
 
 
 # ------------------------------------------------------------------------------- commands
@@ -86,7 +137,10 @@ def _static(case, json_path, plot_path):
 
 
 def cmd_static(args):
-    _static(load_case(args.case), args.json, args.plot)
+    case = load_case(args.case)
+    _compiling(case, "static")
+    _static(case, args.json, args.plot)
+    _compiled(case, "static")
     return 0
 
 
@@ -110,13 +164,16 @@ def _sweep(case, output, plot_dir):
 def cmd_sweep(args):
     case = load_case(args.case)
     budget.check_case(case, "sweep", args.output)
+    _compiling(case, "sweep")
     _sweep(case, args.output, args.plot)
+    _compiled(case, "sweep")
     return 0
 
 
 def cmd_study(args):
     case = load_case(args.case)
     budget.check_case(case, "study", args.output)
+    _compiling(case, "study")
     if case.is_set:
         from . import sets
         study = sets.study_set_case(case, throw=False)
@@ -131,6 +188,7 @@ def cmd_study(args):
             p = _plot_dir(args.plot) / ("limits_set_" + study.parameter.replace(".", "_") + ".png")
             sets.plot_set_limits(case, study, title=case.title, path=p)
             _wrote(p)
+        _compiled(case, "study")
         return 0
     if args.workers is None and args.scheduler is None:
         study = workflows.study_case(case, throw=False, progress=True)
@@ -150,6 +208,7 @@ def cmd_study(args):
         plot_study(study.solution, study.values, study.parameter, study.unit, title=case.title,
                    spall=case.spall(), path=p)
         _wrote(p)
+    _compiled(case, "study")
     return 0
 
 
@@ -173,7 +232,9 @@ def _simulate(case, output, plot_dir):
 def cmd_simulate(args):
     case = load_case(args.case)
     budget.check_case(case, "simulate", args.output)
+    _compiling(case, "simulate")
     _simulate(case, args.output, args.plot)
+    _compiled(case, "simulate")
     return 0
 
 
@@ -205,6 +266,7 @@ def cmd_dataset(args):
     est = budget.check_case(case, "dataset", args.output)
     if est is not None:
         print(est.text(args.workers or 1), flush=True)
+    _compiling(case, "dataset")
     if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
         s = workflows.dataset_case(case, args.output, throw=False, progress=True)
     else:
@@ -221,6 +283,7 @@ def cmd_dataset(args):
     else:
         print("all items simulated successfully")
     _wrote(args.output)
+    _compiled(case, "dataset")
     return 0
 
 
@@ -238,6 +301,7 @@ def cmd_calibrate(args):
 def cmd_compare(args):
     case = load_case(args.case)
     budget.check_case(case, "compare")
+    _compiling(case, "compare")
     cmp = workflows.compare_case(case, throw=False)
     print(report.compare_text(case, cmp))
     if args.plot:
@@ -246,6 +310,7 @@ def cmd_compare(args):
         p = _plot_dir(args.plot) / "compare.png"
         plot_compare(cmp, title=case.title, path=p)
         _wrote(p)
+    _compiled(case, "compare")
     return 0
 
 
@@ -253,10 +318,11 @@ def cmd_demo(args):
     case = load_case(args.case or "demo")
     out = Path(args.out)
     budget.check_case(case, "demo", out / "simulate.h5")
+    _compiling(case, "demo")
     t0 = time.time()
     print(f"bearingsim demo: {case.source}\n")
     print(report.info_text(case), "\n")
-    print("[1/4] quasi-static solve (compiles once, ~10 s)")
+    print("[1/4] quasi-static solve")
     _static(case, out / "static.json", out / "static.png")
     print("\n[2/4] cage-angle sweep past the spall")
     _sweep(case, out / "sweep.h5", out)
@@ -266,6 +332,7 @@ def cmd_demo(args):
         print("\n[4/4] squared-envelope spectrum")
         _spectrum(out / "simulate.h5", out / "envelope_spectrum.png")
     print(f"\ndone in {time.time() - t0:.0f} s; all results and plots are in {out.resolve()}")
+    _compiled(case, "demo")
     return 0
 
 
@@ -408,10 +475,10 @@ def main(argv=None):
     old = _stop_handlers()
     old_hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
+        args = build_parser().parse_args(argv)
         import matplotlib
 
         matplotlib.use("Agg")          # files only, no display needed
-        args = build_parser().parse_args(argv)
         for flag in ("output", "json"):
             budget.check_output(getattr(args, flag, None), "-o" if flag == "output" else "--json")
             if getattr(args, flag, None):
@@ -453,8 +520,10 @@ def run():
     sys.exit(code)
 
 
-#: kept for tests/test_dynamics.py (owned by the core) until it calls workflows.compare_case
-compare_static_dynamic = workflows.compare_case
+def __getattr__(name):
+    if name == "compare_static_dynamic":     # kept for tests/test_dynamics.py (owned by the core)
+        return workflows.compare_case        # until it calls workflows.compare_case
+    raise AttributeError(f"module 'bearingsim.cli' has no attribute {name!r}")
 
 
 if __name__ == "__main__":
