@@ -39,7 +39,7 @@ _EXPORTS = {
     "balls": ("BallState", "balls_at", "reactions_from_balls"),
     "jones": ("JonesSolution", "RESULTS", "OverloadWarning", "solve", "solve_state", "solve_batch",
               "ring_reactions", "load_vector", "Loads"),
-    "mldata": ("load_dataset", "WindowDataset", "dataset_splits"),
+    "mldata": ("load_dataset", "WindowDataset"),
 }
 _WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
 
@@ -98,5 +98,4 @@ __all__ = [
     "Loads",
     "load_dataset",
     "WindowDataset",
-    "dataset_splits",
 ]

@@ -259,10 +259,33 @@ def cmd_spectrum(args):
     return 0
 
 
+#: the data set flags that override a key of the spec
+_DATASET_FLAGS = (("count", "--count", "dataset.count"), ("seed", "--seed", "dataset.seed"),
+                  ("duration_s", "--duration-s", "dataset.duration_s"))
+
+
+def _dataset_overrides(case, args):
+    """The spec with ``--count``, ``--seed``, ``--duration-s`` set (validated as the keys are;
+    a refused value names its flag)."""
+    from .errors import InputError
+
+    if "dataset" not in case.data:
+        return case
+    for attr, flag, key in _DATASET_FLAGS:
+        v = getattr(args, attr, None)
+        if v is None:
+            continue
+        try:
+            case = case.with_value(key, v)
+        except InputError as e:
+            raise InputError(f"{flag} {v:g}: " + str(e).replace("\n", "\n  ")) from None
+    return case
+
+
 def cmd_dataset(args):
     from .dataset import DatasetResult
 
-    case = load_case(args.spec)
+    case = _dataset_overrides(load_case(args.spec), args)
     est = budget.check_case(case, "dataset", args.output)
     if est is not None:
         print(est.text(args.workers or 1), flush=True)
@@ -383,6 +406,9 @@ def build_parser():
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
     _cluster_flags(s, "the chunks")
+    s.add_argument("--count", type=int, metavar="N", help="items (overrides dataset.count)")
+    s.add_argument("--seed", type=int, metavar="S", help="random seed (overrides dataset.seed)")
+    s.add_argument("--duration-s", type=float, metavar="D", help="seconds per item (overrides dataset.duration_s)")
     s = _command(sub, "calibrate", cmd_calibrate, "fit a data set spec to your machine: background, "
                  "resonances and levels from a healthy record (and at most one fault record)",
                  positional=("healthy", "HEALTHY", "healthy record: .npz (channel, fs, rpm, units), .npy, "
