@@ -254,9 +254,65 @@ def _spectrum(path, plot_path):
         _wrote(plot_path)
 
 
+def _record_spectrum(args):
+    """``bearingsim spectrum RECORD``: a real record's spectra with the case's fault lines."""
+    from .record_spectrum import record_spectrum
+
+    case = load_case(args.case or "cwru_6205")
+    if args.case is None:
+        print("bearing: cwru_6205 (the CWRU drive-end 6205; give --case for another)")
+    rs = record_spectrum(args.input, case, rpm=args.rpm, channel=args.channel, sample_rate=args.sample_rate_Hz,
+                         unit=args.unit, overlay=args.overlay, item=args.item)
+    print(report.record_spectrum_text(rs))
+    if args.plot:
+        import matplotlib.pyplot as plt
+
+        from .plots_signal import plot_record_spectrum
+
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        plt.close(plot_record_spectrum(rs, path=args.plot))
+        _wrote(args.plot)
+
+
+#: flags that apply to a record only (not to a `bearingsim simulate` output)
+_RECORD_FLAGS = (("case", "--case"), ("rpm", "--rpm"), ("channel", "--channel"),
+                 ("sample_rate_Hz", "--sample-rate-Hz"), ("unit", "--unit"), ("overlay", "--overlay"))
+
+
 def cmd_spectrum(args):
-    _spectrum(args.input, args.plot)
+    from .errors import InputError
+
+    if Path(args.input).suffix.lower() in (".h5", ".hdf5"):
+        given = [flag for attr, flag in _RECORD_FLAGS if getattr(args, attr, None) is not None]
+        if given:
+            raise InputError(f"{args.input}: {', '.join(given)} apply to a record file (.npz, .npy, "
+                             ".csv, .txt, .wav), not to a simulate output")
+        _spectrum(args.input, args.plot)
+        return 0
+    _record_spectrum(args)
     return 0
+
+
+def _spectrum_parser(sub):
+    s = sub.add_parser("spectrum", help="squared-envelope spectrum of a real record (.npz, .npy, .csv, .txt, .wav) "
+                       "with the bearing's fault lines (BPFO, BPFI and its shaft sidebands, 2 BSF, FTF), "
+                       "or of a `bearingsim simulate` output (.h5)")
+    s.add_argument("input", metavar="RECORD", help="a record file (.npz: CWRU layout with fs, rpm, units; "
+                   ".npy, .csv/.txt one column, .wav) or a `bearingsim simulate` output (.h5)")
+    s.add_argument("-o", "--plot", metavar="PNG", help="write the spectra plot")
+    s.add_argument("--case", metavar="CASE", help="the record's bearing: case file or shipped name "
+                   "(default cwru_6205)")
+    s.add_argument("--rpm", type=float, metavar="N", help="the shaft speed (default: found from the spectrum "
+                   "near the file's rpm or the case's speed)")
+    s.add_argument("--channel", help="the .npz key (default DE or the only array) or the .wav channel number")
+    s.add_argument("--sample-rate-Hz", type=float, metavar="FS", help="sample rate when the file does not say")
+    s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say "
+                   "(default m/s^2)")
+    s.add_argument("--overlay", metavar="SIM.h5", help="overlay a simulation's envelope spectrum: a "
+                   "`bearingsim simulate` output or a `bearingsim dataset` file (item --item)")
+    s.add_argument("--item", type=int, default=0, metavar="K", help="the data set item to overlay (default 0)")
+    s.set_defaults(func=cmd_spectrum)
+    return s
 
 
 #: the data set flags that override a key of the spec
@@ -398,9 +454,7 @@ def build_parser():
     _cluster_flags(s, "the sweeps of a geometry, material or defect study")
     _command(sub, "simulate", cmd_simulate, "dynamic simulation (shaft, housing, sensor resonator) "
              "with the Jones bearing forces; HDF5 output", output=True, plot=plots_into)
-    _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
-             positional=("input", "OUT.h5", "a `bearingsim simulate` output"),
-             plot=("PNG", "write the envelope spectrum plot"))
+    _spectrum_parser(sub)
     s = _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
@@ -425,7 +479,9 @@ def build_parser():
     s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
     s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
     s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
-    _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
+    _command(sub, "compare", cmd_compare, "quasi-static vs dynamic: the ball loads of the quasi-static "
+             "sweep (Jones model, no inertia) against the dynamic simulation's as the balls pass the spall, "
+             "and the dynamic amplification",
              plot=("DIR", "write compare.png into DIR"))
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
                  positional=None)
