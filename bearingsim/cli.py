@@ -178,12 +178,15 @@ def cmd_study(args):
         from . import sets
         study = sets.study_set_case(case, throw=False)
         _warn_failures(study.solution.result, "study states")
-        sets.write_set_study(args.output, case, study)
+        table = sets.set_study_table(case, study)
+        sets.write_set_study(args.output, case, study, table)
+        csv = Path(args.output).with_suffix(".csv")
+        sets.write_set_study_csv(csv, case, study, table)
         print(sets.set_study_text(case, study))
-        _wrote(args.output)
+        _wrote(args.output, csv)
         if args.plot:
             p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
-            sets.plot_set_study(study, title=case.title, path=p)
+            sets.plot_set_study(study, title=case.title, path=p, table=table)
             _wrote(p)
             p = _plot_dir(args.plot) / ("limits_set_" + study.parameter.replace(".", "_") + ".png")
             sets.plot_set_limits(case, study, title=case.title, path=p)
