@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|cache|demo``.
 
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
@@ -296,6 +296,30 @@ def cmd_spectrum(args):
     return 0
 
 
+def cmd_cache(args):
+    """``bearingsim cache [--clear]``: where the compiled programs are kept, how much, clearing."""
+    from . import runtime
+
+    d = runtime.configured_cache_dir()
+    if d is None:
+        print("compilation cache: off (BEARINGSIM_CACHE_DIR=off): every run compiles")
+        return 0
+    n, b = runtime.cache_size(d)
+    print(f"compilation cache: {d} ({n} files, {budget.human_bytes(b)}); move it with "
+          "BEARINGSIM_CACHE_DIR=FOLDER, switch it off with BEARINGSIM_CACHE_DIR=off")
+    if args.clear:
+        print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
+    return 0
+
+
+def _cache_parser(sub):
+    s = sub.add_parser("cache", help="where the compiled programs are kept (the persistent compilation "
+                       "cache: ~/.cache/bearingsim/jax, BEARINGSIM_CACHE_DIR), and --clear")
+    s.add_argument("--clear", action="store_true", help="delete the cached programs")
+    s.set_defaults(func=cmd_cache)
+    return s
+
+
 def _spectrum_parser(sub):
     s = sub.add_parser("spectrum", help="squared-envelope spectrum of a real record (.npz, .npy, .csv, .txt, .wav) "
                        "with the bearing's fault lines (BPFO, BPFI and its shaft sidebands, 2 BSF, FTF), "
@@ -486,6 +510,7 @@ def build_parser():
              "sweep (Jones model, no inertia) against the dynamic simulation's as the balls pass the spall, "
              "and the dynamic amplification",
              plot=("DIR", "write compare.png into DIR"))
+    _cache_parser(sub)
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
                  positional=None)
     s.add_argument("--case", default=None, help="case file or shipped case name (default: demo)")
