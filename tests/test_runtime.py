@@ -92,6 +92,7 @@ def test_cold_cache_is_said_and_counted(tmp_path, monkeypatch):
     warm = budget.check_case(case, "dataset")
     assert warm.compile_seconds == 0.0 and budget.compile_notice(case, "dataset") is None
     assert warm.seconds == base and "compiling" not in warm.text()
+    assert 0 < warm.load_seconds < est.compile_seconds and "loading the compiled programs" in warm.text()
     # another shape of programs (item length) is cold again
     other = case.with_value("dataset.duration_s", 0.05)
     assert budget.compile_notice(other, "dataset") is not None
