@@ -21,46 +21,43 @@ if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "bearingsim" and "__m
     for _sg in (_signal.SIGINT, _signal.SIGTERM):
         _signal.signal(_sg, _stopped_while_loading)
 
-import jax as _jax  # noqa: E402
+from . import runtime as _runtime  # noqa: E402
 
-_jax.config.update("jax_enable_x64", True)
+_runtime.configure()        # float64 and the persistent compilation cache, before JAX loads
 
 from ._version import __version__  # noqa: E402
-from .geometry import Bearing, Material, STEEL, SILICON_NITRIDE  # noqa: E402
-from .hertz import (  # noqa: E402
-    ellipk_ellipe,
-    ellipticity,
-    contact_constant,
-    hertz_contact,
-    HertzContact,
-    dimensionless_hertz,
-)
-from .kinematics import (  # noqa: E402
-    Operation,
-    ball_kinematics,
-    defect_frequencies,
-    DefectFrequencies,
-)
-from .defect import Spall, NO_SPALL, depth_profile, contact_depths  # noqa: E402
-from .errors import (  # noqa: E402
-    BearingsimError,
-    InputError,
-    NotConvergedError,
-    InvalidStateError,
-    OutputError,
-)
-from .balls import BallState, balls_at, reactions_from_balls  # noqa: E402
-from .jones import (  # noqa: E402
-    JonesSolution,
-    RESULTS,
-    OverloadWarning,
-    solve,
-    solve_state,
-    solve_batch,
-    ring_reactions,
-    load_vector,
-    Loads,
-)
+
+#: the names a user types, and the module each comes from: imported at first use (PEP 562), so
+#: that ``import bearingsim`` and ``bearingsim --help`` do not load JAX
+_EXPORTS = {
+    "geometry": ("Bearing", "Material", "STEEL", "SILICON_NITRIDE"),
+    "hertz": ("ellipk_ellipe", "ellipticity", "contact_constant", "hertz_contact", "HertzContact",
+              "dimensionless_hertz"),
+    "kinematics": ("Operation", "ball_kinematics", "defect_frequencies", "DefectFrequencies"),
+    "defect": ("Spall", "NO_SPALL", "depth_profile", "contact_depths"),
+    "errors": ("BearingsimError", "InputError", "NotConvergedError", "InvalidStateError", "OutputError"),
+    "balls": ("BallState", "balls_at", "reactions_from_balls"),
+    "jones": ("JonesSolution", "RESULTS", "OverloadWarning", "solve", "solve_state", "solve_batch",
+              "ring_reactions", "load_vector", "Loads"),
+    "mldata": ("load_dataset", "WindowDataset"),
+}
+_WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
+
+
+def __getattr__(name):
+    mod = _WHERE.get(name)
+    if mod is None:
+        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(f".{mod}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
+
 
 __all__ = [
     "__version__",
@@ -99,4 +96,6 @@ __all__ = [
     "solve_batch",
     "ring_reactions",
     "Loads",
+    "load_dataset",
+    "WindowDataset",
 ]

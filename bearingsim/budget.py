@@ -18,10 +18,21 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+from . import runtime
 from .errors import InputError
 
 __all__ = ["Estimate", "check_case", "check_output", "dataset_estimate", "simulation_estimate",
-           "available_memory", "free_disk", "human_bytes"]
+           "available_memory", "free_disk", "human_bytes", "COMPILE_SECONDS", "program_key",
+           "compile_seconds", "compile_notice", "mark_compiled"]
+
+#: compile time (s) of each command's programs with an empty cache, on one process of the 2-core
+#: test machine (measured 2026-11-25, see docs/scale.md "Compilation cache"); with a warm cache
+#: (the second run) they load in about a second
+COMPILE_SECONDS = {"static": 6.0, "sweep": 10.0, "study": 12.0, "simulate": 30.0, "compare": 35.0,
+                   "dataset": 35.0, "demo": 60.0, "spectrum": 0.0, "set": 10.0}
+#: with a warm cache a process still traces its programs and loads them from the cache: this
+#: share of the compile time (measured: a 40-item data set, 16 s warm vs 48 s cold, contended)
+WARM_FRACTION = 0.3
 
 #: memory of the libraries and the compiled programs of one process (JAX, XLA; measured ~0.75 GB)
 BASE_BYTES = 1.0e9
@@ -79,12 +90,19 @@ class Estimate:
     seconds: float
     memory_keys: tuple
     disk_keys: tuple
+    #: compile time of the programs when the cache is cold (0: compiled before, loaded from the cache)
+    compile_seconds: float = 0.0
+    #: with a warm cache: the time to trace the programs and load them from the cache
+    load_seconds: float = 0.0
 
     def text(self, workers: int = 1) -> str:
-        t = self.seconds / max(workers, 1)
+        t = self.seconds / max(workers, 1) + self.compile_seconds + self.load_seconds
+        comp = f", compiling included (~{_human_time(self.compile_seconds)}, first run only)" \
+            if self.compile_seconds else f", loading the compiled programs included (~{_human_time(self.load_seconds)})" \
+            if self.load_seconds else ""
         return (f"{self.what}: needs ~{human_bytes(self.memory)} of memory per process, "
                 f"~{human_bytes(self.disk)} of disk, ~{_human_time(t)}"
-                f"{f' on {workers} workers' if workers > 1 else ' in one process'} (rough)")
+                f"{f' on {workers} workers' if workers > 1 else ' in one process'}{comp} (rough)")
 
     def check(self, source, output=None):
         """Raise :class:`InputError` if the memory or the disk cannot fit (every problem at once)."""
@@ -158,7 +176,55 @@ def check_case(case, command, output=None):
             problems.append(str(err).split(": ", 1)[1])
     if problems:
         raise InputError(f"{case.source}: " + "; ".join(problems))
-    return est[-1] if est else None
+    if not est:
+        return None
+    from dataclasses import replace
+
+    cold = compile_seconds(case, command)
+    if cold is not None:
+        return replace(est[-1], compile_seconds=cold)
+    what = "set" if getattr(case, "is_set", False) and command in ("static", "study") else command
+    return replace(est[-1], load_seconds=WARM_FRACTION * COMPILE_SECONDS.get(what, 0.0))
+
+
+def program_key(case, command) -> str:
+    """What decides which programs ``command`` compiles for ``case`` (the command, a set or one
+    bearing, the number of balls, a defect or not, the data set's chunk and samples): two runs
+    with the same key share their compiled programs."""
+    d = case.data
+    parts = [command, "set" if getattr(case, "is_set", False) else "one",
+             str(d.get("bearing", {}).get("balls")), str(sorted(d.get("defect", {}) or d.get("spall", {}) or {}))]
+    if command == "dataset" and "dataset" in d:
+        parts += [str(d["dataset"].get("chunk")), str(d["dataset"].get("duration_s")),
+                  str(d.get("dynamics", {}).get("sample_rate_Hz"))]
+    if command in ("simulate", "compare", "demo") and "dynamics" in d:
+        parts += [str(d["dynamics"].get("duration_s")), str(d["dynamics"].get("sample_rate_Hz"))]
+    return "|".join(parts)
+
+
+def compile_seconds(case, command):
+    """Seconds the programs of ``command`` on ``case`` take to compile in this process: None when
+    they were compiled into the persistent cache before (:func:`bearingsim.runtime.cold`)."""
+    what = "set" if getattr(case, "is_set", False) and command in ("static", "study") else command
+    s = COMPILE_SECONDS.get(what, 0.0)
+    if not s or not runtime.cold(program_key(case, command)):
+        return None
+    return s
+
+
+def compile_notice(case, command):
+    """The line a command prints before it compiles with a cold cache (None when warm)."""
+    s = compile_seconds(case, command)
+    if s is None:
+        return None
+    where = runtime.configured_cache_dir()
+    keep = f"kept in {where}" if where is not None else "not kept: BEARINGSIM_CACHE_DIR is off"
+    return f"compiling, first run only: ~{_human_time(s)} (rough; the compiled programs are {keep})"
+
+
+def mark_compiled(case, command):
+    """Record that ``command``'s programs for ``case`` are in the persistent cache."""
+    runtime.mark_warm(program_key(case, command))
 
 
 def check_output(path, flag="-o"):

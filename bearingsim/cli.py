@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|cache|demo``.
 
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
@@ -18,12 +18,52 @@ import threading
 import time
 from pathlib import Path
 
-import numpy as np
-
-from . import budget, io, report, workflows
-from .case import load_case
-from .case.units import from_si
+from . import budget
 from .errors import BearingsimError, OutputError
+
+
+class _Lazy:
+    """A module imported at its first use: ``bearingsim --help`` does not load JAX (the import
+    statements stay visible to tests/test_architecture.py)."""
+
+    def __init__(self, load):
+        self._load = load
+
+    def __getattr__(self, attr):
+        return getattr(self._load(), attr)
+
+
+def _io():
+    from . import io as m
+    return m
+
+
+def _report():
+    from . import report as m
+    return m
+
+
+def _workflows():
+    from . import workflows as m
+    return m
+
+
+def _numpy():
+    import numpy as m
+    return m
+
+
+np, io, report, workflows = _Lazy(_numpy), _Lazy(_io), _Lazy(_report), _Lazy(_workflows)
+
+
+def load_case(*args, **kwargs):
+    from .case import load_case as f
+    return f(*args, **kwargs)
+
+
+def from_si(*args, **kwargs):
+    from .case.units import from_si as f
+    return f(*args, **kwargs)
 
 
 def _wrote(*paths):
@@ -43,6 +83,17 @@ def _plot_dir(path):
     d = Path(path)
     d.mkdir(parents=True, exist_ok=True)
     return d
+
+
+def _compiling(case, command):
+    """Say so before a command compiles with a cold cache ("compiling, first run only: ~N s")."""
+    line = budget.compile_notice(case, command)
+    if line:
+        print(line, flush=True)
+
+
+def _compiled(case, command):
+    budget.mark_compiled(case, command)
 
 
 # ------------------------------------------------------------------------------- commands
@@ -86,7 +137,10 @@ def _static(case, json_path, plot_path):
 
 
 def cmd_static(args):
-    _static(load_case(args.case), args.json, args.plot)
+    case = load_case(args.case)
+    _compiling(case, "static")
+    _static(case, args.json, args.plot)
+    _compiled(case, "static")
     return 0
 
 
@@ -110,27 +164,34 @@ def _sweep(case, output, plot_dir):
 def cmd_sweep(args):
     case = load_case(args.case)
     budget.check_case(case, "sweep", args.output)
+    _compiling(case, "sweep")
     _sweep(case, args.output, args.plot)
+    _compiled(case, "sweep")
     return 0
 
 
 def cmd_study(args):
     case = load_case(args.case)
     budget.check_case(case, "study", args.output)
+    _compiling(case, "study")
     if case.is_set:
         from . import sets
         study = sets.study_set_case(case, throw=False)
         _warn_failures(study.solution.result, "study states")
-        sets.write_set_study(args.output, case, study)
+        table = sets.set_study_table(case, study)
+        sets.write_set_study(args.output, case, study, table)
+        csv = Path(args.output).with_suffix(".csv")
+        sets.write_set_study_csv(csv, case, study, table)
         print(sets.set_study_text(case, study))
-        _wrote(args.output)
+        _wrote(args.output, csv)
         if args.plot:
             p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
-            sets.plot_set_study(study, title=case.title, path=p)
+            sets.plot_set_study(study, title=case.title, path=p, table=table)
             _wrote(p)
             p = _plot_dir(args.plot) / ("limits_set_" + study.parameter.replace(".", "_") + ".png")
             sets.plot_set_limits(case, study, title=case.title, path=p)
             _wrote(p)
+        _compiled(case, "study")
         return 0
     if args.workers is None and args.scheduler is None:
         study = workflows.study_case(case, throw=False, progress=True)
@@ -150,6 +211,7 @@ def cmd_study(args):
         plot_study(study.solution, study.values, study.parameter, study.unit, title=case.title,
                    spall=case.spall(), path=p)
         _wrote(p)
+    _compiled(case, "study")
     return 0
 
 
@@ -173,7 +235,9 @@ def _simulate(case, output, plot_dir):
 def cmd_simulate(args):
     case = load_case(args.case)
     budget.check_case(case, "simulate", args.output)
+    _compiling(case, "simulate")
     _simulate(case, args.output, args.plot)
+    _compiled(case, "simulate")
     return 0
 
 
@@ -193,18 +257,122 @@ def _spectrum(path, plot_path):
         _wrote(plot_path)
 
 
+def _record_spectrum(args):
+    """``bearingsim spectrum RECORD``: a real record's spectra with the case's fault lines."""
+    from .record_spectrum import record_spectrum
+
+    case = load_case(args.case or "cwru_6205")
+    if args.case is None:
+        print("bearing: cwru_6205 (the CWRU drive-end 6205; give --case for another)")
+    rs = record_spectrum(args.input, case, rpm=args.rpm, channel=args.channel, sample_rate=args.sample_rate_Hz,
+                         unit=args.unit, overlay=args.overlay, item=args.item)
+    print(report.record_spectrum_text(rs))
+    if args.plot:
+        import matplotlib.pyplot as plt
+
+        from .plots_signal import plot_record_spectrum
+
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        plt.close(plot_record_spectrum(rs, path=args.plot))
+        _wrote(args.plot)
+
+
+#: flags that apply to a record only (not to a `bearingsim simulate` output)
+_RECORD_FLAGS = (("case", "--case"), ("rpm", "--rpm"), ("channel", "--channel"),
+                 ("sample_rate_Hz", "--sample-rate-Hz"), ("unit", "--unit"), ("overlay", "--overlay"))
+
+
 def cmd_spectrum(args):
-    _spectrum(args.input, args.plot)
+    from .errors import InputError
+
+    if Path(args.input).suffix.lower() in (".h5", ".hdf5"):
+        given = [flag for attr, flag in _RECORD_FLAGS if getattr(args, attr, None) is not None]
+        if given:
+            raise InputError(f"{args.input}: {', '.join(given)} apply to a record file (.npz, .npy, "
+                             ".csv, .txt, .wav), not to a simulate output")
+        _spectrum(args.input, args.plot)
+        return 0
+    _record_spectrum(args)
     return 0
+
+
+def cmd_cache(args):
+    """``bearingsim cache [--clear]``: where the compiled programs are kept, how much, clearing."""
+    from . import runtime
+
+    d = runtime.configured_cache_dir()
+    if d is None:
+        print("compilation cache: off (BEARINGSIM_CACHE_DIR=off): every run compiles")
+        return 0
+    n, b = runtime.cache_size(d)
+    print(f"compilation cache: {d} ({n} files, {budget.human_bytes(b)}); move it with "
+          "BEARINGSIM_CACHE_DIR=FOLDER, switch it off with BEARINGSIM_CACHE_DIR=off")
+    if args.clear:
+        print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
+    return 0
+
+
+def _cache_parser(sub):
+    s = sub.add_parser("cache", help="where the compiled programs are kept (the persistent compilation "
+                       "cache: ~/.cache/bearingsim/jax, BEARINGSIM_CACHE_DIR), and --clear")
+    s.add_argument("--clear", action="store_true", help="delete the cached programs")
+    s.set_defaults(func=cmd_cache)
+    return s
+
+
+def _spectrum_parser(sub):
+    s = sub.add_parser("spectrum", help="squared-envelope spectrum of a real record (.npz, .npy, .csv, .txt, .wav) "
+                       "with the bearing's fault lines (BPFO, BPFI and its shaft sidebands, 2 BSF, FTF), "
+                       "or of a `bearingsim simulate` output (.h5)")
+    s.add_argument("input", metavar="RECORD", help="a record file (.npz: CWRU layout with fs, rpm, units; "
+                   ".npy, .csv/.txt one column, .wav) or a `bearingsim simulate` output (.h5)")
+    s.add_argument("-o", "--plot", metavar="PNG", help="write the spectra plot")
+    s.add_argument("--case", metavar="CASE", help="the record's bearing: case file or shipped name "
+                   "(default cwru_6205)")
+    s.add_argument("--rpm", type=float, metavar="N", help="the shaft speed (default: found from the spectrum "
+                   "near the file's rpm or the case's speed)")
+    s.add_argument("--channel", help="the .npz key (default DE or the only array) or the .wav channel number")
+    s.add_argument("--sample-rate-Hz", type=float, metavar="FS", help="sample rate when the file does not say")
+    s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say "
+                   "(default m/s^2)")
+    s.add_argument("--overlay", metavar="SIM.h5", help="overlay a simulation's envelope spectrum: a "
+                   "`bearingsim simulate` output or a `bearingsim dataset` file (item --item)")
+    s.add_argument("--item", type=int, default=0, metavar="K", help="the data set item to overlay (default 0)")
+    s.set_defaults(func=cmd_spectrum)
+    return s
+
+
+#: the data set flags that override a key of the spec
+_DATASET_FLAGS = (("count", "--count", "dataset.count"), ("seed", "--seed", "dataset.seed"),
+                  ("duration_s", "--duration-s", "dataset.duration_s"))
+
+
+def _dataset_overrides(case, args):
+    """The spec with ``--count``, ``--seed``, ``--duration-s`` set (validated as the keys are;
+    a refused value names its flag)."""
+    from .errors import InputError
+
+    if "dataset" not in case.data:
+        return case
+    for attr, flag, key in _DATASET_FLAGS:
+        v = getattr(args, attr, None)
+        if v is None:
+            continue
+        try:
+            case = case.with_value(key, v)
+        except InputError as e:
+            raise InputError(f"{flag} {v:g}: " + str(e).replace("\n", "\n  ")) from None
+    return case
 
 
 def cmd_dataset(args):
     from .dataset import DatasetResult
 
-    case = load_case(args.spec)
+    case = _dataset_overrides(load_case(args.spec), args)
     est = budget.check_case(case, "dataset", args.output)
     if est is not None:
         print(est.text(args.workers or 1), flush=True)
+    _compiling(case, "dataset")
     if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
         s = workflows.dataset_case(case, args.output, throw=False, progress=True)
     else:
@@ -221,6 +389,7 @@ def cmd_dataset(args):
     else:
         print("all items simulated successfully")
     _wrote(args.output)
+    _compiled(case, "dataset")
     return 0
 
 
@@ -238,6 +407,7 @@ def cmd_calibrate(args):
 def cmd_compare(args):
     case = load_case(args.case)
     budget.check_case(case, "compare")
+    _compiling(case, "compare")
     cmp = workflows.compare_case(case, throw=False)
     print(report.compare_text(case, cmp))
     if args.plot:
@@ -246,6 +416,7 @@ def cmd_compare(args):
         p = _plot_dir(args.plot) / "compare.png"
         plot_compare(cmp, title=case.title, path=p)
         _wrote(p)
+    _compiled(case, "compare")
     return 0
 
 
@@ -253,10 +424,11 @@ def cmd_demo(args):
     case = load_case(args.case or "demo")
     out = Path(args.out)
     budget.check_case(case, "demo", out / "simulate.h5")
+    _compiling(case, "demo")
     t0 = time.time()
     print(f"bearingsim demo: {case.source}\n")
     print(report.info_text(case), "\n")
-    print("[1/4] quasi-static solve (compiles once, ~10 s)")
+    print("[1/4] quasi-static solve")
     _static(case, out / "static.json", out / "static.png")
     print("\n[2/4] cage-angle sweep past the spall")
     _sweep(case, out / "sweep.h5", out)
@@ -266,6 +438,7 @@ def cmd_demo(args):
         print("\n[4/4] squared-envelope spectrum")
         _spectrum(out / "simulate.h5", out / "envelope_spectrum.png")
     print(f"\ndone in {time.time() - t0:.0f} s; all results and plots are in {out.resolve()}")
+    _compiled(case, "demo")
     return 0
 
 
@@ -308,14 +481,15 @@ def build_parser():
     _cluster_flags(s, "the sweeps of a geometry, material or defect study")
     _command(sub, "simulate", cmd_simulate, "dynamic simulation (shaft, housing, sensor resonator) "
              "with the Jones bearing forces; HDF5 output", output=True, plot=plots_into)
-    _command(sub, "spectrum", cmd_spectrum, "envelope spectrum of a simulate output: peak near the defect's line (BPFO, BPFI, 2 BSF), harmonics",
-             positional=("input", "OUT.h5", "a `bearingsim simulate` output"),
-             plot=("PNG", "write the envelope spectrum plot"))
+    _spectrum_parser(sub)
     s = _command(sub, "dataset", cmd_dataset, "labelled data set of simulated sensor signals ([dataset] "
              "ranges of speed, loads and spall); HDF5 output",
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
     _cluster_flags(s, "the chunks")
+    s.add_argument("--count", type=int, metavar="N", help="items (overrides dataset.count)")
+    s.add_argument("--seed", type=int, metavar="S", help="random seed (overrides dataset.seed)")
+    s.add_argument("--duration-s", type=float, metavar="D", help="seconds per item (overrides dataset.duration_s)")
     s = _command(sub, "calibrate", cmd_calibrate, "fit a data set spec to your machine: background, "
                  "resonances and levels from a healthy record (and at most one fault record)",
                  positional=("healthy", "HEALTHY", "healthy record: .npz (channel, fs, rpm, units), .npy, "
@@ -332,8 +506,11 @@ def build_parser():
     s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
     s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
     s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
-    _command(sub, "compare", cmd_compare, "quasi-static sweep and dynamic run side by side, with amplification",
+    _command(sub, "compare", cmd_compare, "quasi-static vs dynamic: the ball loads of the quasi-static "
+             "sweep (Jones model, no inertia) against the dynamic simulation's as the balls pass the spall, "
+             "and the dynamic amplification",
              plot=("DIR", "write compare.png into DIR"))
+    _cache_parser(sub)
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
                  positional=None)
     s.add_argument("--case", default=None, help="case file or shipped case name (default: demo)")
@@ -408,10 +585,10 @@ def main(argv=None):
     old = _stop_handlers()
     old_hook, sys.unraisablehook = sys.unraisablehook, _unraisable
     try:
+        args = build_parser().parse_args(argv)
         import matplotlib
 
         matplotlib.use("Agg")          # files only, no display needed
-        args = build_parser().parse_args(argv)
         for flag in ("output", "json"):
             budget.check_output(getattr(args, flag, None), "-o" if flag == "output" else "--json")
             if getattr(args, flag, None):
@@ -453,8 +630,10 @@ def run():
     sys.exit(code)
 
 
-#: kept for tests/test_dynamics.py (owned by the core) until it calls workflows.compare_case
-compare_static_dynamic = workflows.compare_case
+def __getattr__(name):
+    if name == "compare_static_dynamic":     # kept for tests/test_dynamics.py (owned by the core)
+        return workflows.compare_case        # until it calls workflows.compare_case
+    raise AttributeError(f"module 'bearingsim.cli' has no attribute {name!r}")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ it returns the Figure and saves it at 120 dpi when ``path`` is given.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import matplotlib.transforms as mtransforms
@@ -15,11 +16,11 @@ import numpy as np
 from .case.units import from_si
 from .signal import EnvelopeSpectrum, Spectrum, defect_markers
 
-__all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer"]
+__all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer", "plot_record_spectrum"]
 
 # colours per marker family; anything else cycles through _OTHER
 _FAMILY_COLOURS = {"BPFO": "#d62728", "BPFI": "#9467bd", "BSF": "#8c564b", "2BSF": "#8c564b",
-                   "FTF": "#2ca02c", "SHAFT": "#1f77b4"}
+                   "FTF": "#2ca02c", "SHAFT": "#1f77b4", "BPFI-FR": "#c5b0d5", "BPFI+FR": "#c5b0d5"}
 _OTHER = ["#ff7f0e", "#17becf", "#e377c2", "#bcbd22", "#7f7f7f"]
 _HARM = re.compile(r"^(\d+)\s*[x×*]\s*(.+)$")
 _DPI = 120
@@ -210,3 +211,41 @@ def plot_transfer(reports, path=None):
         fig.savefig(path, dpi=_DPI)
         plt.close(fig)
     return fig
+
+
+def plot_record_spectrum(rs, path=None, fmax=None):
+    """A record's squared-envelope spectrum with the bearing's fault lines (BPFO and BPFI with
+    harmonics, BPFI -/+ f_r, 2 BSF, FTF, shaft) and, on its own axis, a simulation's (``rs.overlay``);
+    below, the amplitude spectrum with the demodulation band.  ``rs``: a
+    :class:`bearingsim.record_spectrum.RecordSpectrum`."""
+    L = rs.lines
+    marks = defect_markers({k: L[k] for k in ("BPFO", "BPFI", "BPFI-fr", "BPFI+fr", "2BSF", "FTF", "shaft")},
+                           n_harmonics=3, harmonics_of=("BPFO", "BPFI"))
+    fmax = 1.1 * 3.0 * max(L["BPFO"], L["BPFI"]) if fmax is None else float(fmax)
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(11, 7.5), constrained_layout=True,
+                                  gridspec_kw=dict(height_ratios=(3, 2)))
+    plot_envelope_spectrum(rs.envelope, marks, fmax=fmax, ax=ax, unit="m/s²",
+                           title=f"{Path(rs.source).name}{f' ({rs.channel})' if rs.channel else ''}: squared-envelope "
+                                 f"spectrum\nfault lines of {rs.case_title.split(',')[0]} at shaft "
+                                 f"{60 * rs.shaft_hz:.1f} rpm ({rs.shaft_source.split(' (')[0]})")
+    if rs.overlay is not None:
+        ov = rs.overlay
+        tw = ax.twinx()
+        sel = ov.spectrum.freqs <= fmax
+        tw.plot(ov.spectrum.freqs[sel], ov.spectrum.amplitude[sel], color="#ff7f0e", lw=0.9, alpha=0.75,
+                label=f"simulation: {ov.source}" + (f", {60 * ov.shaft_hz:.0f} rpm" if ov.shaft_hz else "")
+                + f", band {ov.band[0]:.0f}–{ov.band[1]:.0f} Hz")
+        top = ov.spectrum.amplitude[sel][ov.spectrum.freqs[sel] > 0].max()
+        tw.set_ylim(0.0, 1.32 * top if top > 0 else 1.0)
+        tw.set_ylabel("simulation: squared-envelope amplitude ((m/s²)²)", color="#ff7f0e")
+        tw.tick_params(axis="y", colors="#ff7f0e")
+        tw.legend(loc="upper right", bbox_to_anchor=(1.0, 0.33), fontsize=8, framealpha=0.9)
+    f, A = rs.spectrum.freqs, rs.spectrum.amplitude
+    ax2.semilogy(f[1:], np.maximum(A[1:], 1e-12), color="0.2", lw=0.6, label="amplitude spectrum")
+    ax2.axvspan(*rs.band, color="#ff7f0e", alpha=0.15, label=f"demodulation band {rs.band[0]:.0f}–{rs.band[1]:.0f} Hz")
+    ax2.set_xlim(0.0, rs.sample_rate / 2.0)
+    ax2.set_xlabel("frequency (Hz)")
+    ax2.set_ylabel("amplitude (m/s²)")
+    ax2.grid(alpha=0.3, which="both")
+    ax2.legend(loc="upper right", fontsize=8)
+    return _finish(fig, path)

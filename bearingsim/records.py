@@ -1,5 +1,7 @@
-"""Record files of an ML user's machine (``bearingsim calibrate``): reading .npz (the CWRU layout:
-a channel such as DE, fs, rpm, units), .npy and .csv / .txt (one column), and the checks a
+"""Record files of an ML user's machine (``bearingsim calibrate``, ``bearingsim spectrum``): reading
+.npz (the CWRU layout: a channel such as DE, fs, rpm, units), .npy, .csv / .txt (one column) and
+.wav (PCM or float; the sample rate from the file, integer samples scaled to +-1 full scale,
+``--channel`` a channel number of a multi-channel file), and the checks a
 record must pass before anything is fitted to it (sample rate, length, finite samples, one
 channel), every problem in one :class:`~bearingsim.errors.InputError` (exit code 2)."""
 from __future__ import annotations
@@ -11,7 +13,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "check_record", "read_record"]
+__all__ = ["UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "RECORD_SUFFIXES", "check_record", "read_record"]
 
 #: record units: factor to m/s^2
 UNITS = {"g": 9.80665, "m/s^2": 1.0}
@@ -64,11 +66,36 @@ def check_record(x, fs, what="record", case=None, max_rpm=None) -> np.ndarray:
     return a.astype(np.float64)
 
 
-def read_record(path, channel=None, sample_rate=None, unit=None):
+#: the record formats :func:`read_record` reads
+RECORD_SUFFIXES = (".npz", ".npy", ".csv", ".txt", ".wav")
+
+
+def _read_wav(p, channel):
+    """(samples, sample rate) of a .wav file: integer PCM scaled to +-1 full scale."""
+    from scipy.io import wavfile
+
+    fs, x = wavfile.read(p)
+    if x.dtype.kind in "iu":
+        info = np.iinfo(x.dtype)
+        x = (x.astype(np.float64) - (0.0 if x.dtype.kind == "i" else (info.max + 1) / 2.0)) / (info.max + 1.0)
+    if x.ndim == 2:
+        if channel is None and x.shape[1] > 1:
+            raise InputError(f"{p}: name the channel (--channel 0..{x.shape[1] - 1}): the file has "
+                             f"{x.shape[1]} channels")
+        try:
+            k = 0 if channel is None else int(channel)
+            x = x[:, k]
+        except (ValueError, IndexError):
+            raise InputError(f"{p}: --channel {channel}: a channel number 0..{x.shape[1] - 1}") from None
+    return x, float(fs)
+
+
+def read_record(path, channel=None, sample_rate=None, unit=None, default_unit=None):
     """(samples, sample rate Hz, unit, nominal rpm or None, channel) of a record file: .npz (keys
-    like the CWRU files: a channel such as DE, fs, rpm, units), .npy, or .csv / .txt (one column;
-    commas, semicolons or white space).  ``sample_rate`` / ``unit`` given override nothing: they
-    must agree with the file's own when it has one."""
+    like the CWRU files: a channel such as DE, fs, rpm, units), .npy, .csv / .txt (one column;
+    commas, semicolons or white space) or .wav.  ``sample_rate`` / ``unit`` given override
+    nothing: they must agree with the file's own when it has one.  ``default_unit``: the unit
+    when neither the file nor ``unit`` says (None: that is an error)."""
     p = Path(path)
     if not p.exists():
         raise InputError(f"{p}: no such record file")
@@ -102,6 +129,8 @@ def read_record(path, channel=None, sample_rate=None, unit=None):
                     unit_file = "g" if u.startswith("g") else "m/s^2" if u.startswith("m/s") else None
         elif suffix == ".npy":
             x = np.load(p, allow_pickle=False)
+        elif suffix == ".wav":
+            x, fs_file = _read_wav(p, channel)
         elif suffix in (".csv", ".txt"):
             text = p.read_text(encoding="utf-8")
             rows = [r for r in text.replace(";", ",").splitlines() if r.strip() and not r.lstrip().startswith("#")]
@@ -110,19 +139,19 @@ def read_record(path, channel=None, sample_rate=None, unit=None):
             except ValueError:
                 raise InputError(f"{p}: not a column of numbers (first row {rows[0][:40]!r})") from None
         else:
-            raise InputError(f"{p}: unknown record format {suffix or '(no suffix)'}: use .npz, .npy, .csv or .txt")
+            raise InputError(f"{p}: unknown record format {suffix or '(no suffix)'}: use .npz, .npy, .csv, .txt or .wav")
     except InputError:
         raise
     except (OSError, ValueError, UnicodeDecodeError) as e:
         raise InputError(f"{p}: cannot read the record: {e}") from None
-    if channel is not None and suffix != ".npz":
-        raise InputError(f"{p}: --channel {channel} applies to .npz files only")
+    if channel is not None and suffix not in (".npz", ".wav"):
+        raise InputError(f"{p}: --channel {channel} applies to .npz and .wav files only")
     if sample_rate is not None and fs_file is not None and not math.isclose(float(sample_rate), fs_file, rel_tol=1e-9):
         raise InputError(f"{p}: --sample-rate-Hz {sample_rate:g} disagrees with the file's fs = {fs_file:g} Hz")
     if unit is not None and unit_file is not None and unit != unit_file:
         raise InputError(f"{p}: --unit {unit} disagrees with the file's units ({unit_file})")
     fs = fs_file if fs_file is not None else sample_rate
-    u = unit_file if unit_file is not None else unit
+    u = unit_file if unit_file is not None else unit if unit is not None else default_unit
     if fs is None:
         raise InputError(f"{p}: no sample rate: give --sample-rate-Hz (Hz, > 0)")
     if u is None:

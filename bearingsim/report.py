@@ -250,3 +250,22 @@ def calibration_text(cal, output=None) -> str:
         lines.append(f"dataset.signal_gain = [{cal.signal_gain_range[0]:g}, {cal.signal_gain_range[1]:g}] "
                      "(the template's: no fault record)")
     return "\n".join(lines)
+
+
+def record_spectrum_text(rs) -> str:
+    """A record's sampling, shaft speed, band and the strength of each fault line over the
+    envelope spectrum's floor (bearingsim.record_spectrum.RecordSpectrum)."""
+    rows = [(k, f0, *rs.strengths[k]) for k, f0 in rs.lines.items()]
+    out = [f"{rs.source}{f' channel {rs.channel}' if rs.channel else ''}: {rs.samples} samples at "
+           f"{rs.sample_rate:g} Hz ({rs.samples / rs.sample_rate:.3f} s), unit {rs.unit}",
+           f"bearing: {rs.case_title}; shaft {60 * rs.shaft_hz:.1f} rpm ({rs.shaft_hz:.3f} Hz, {rs.shaft_source})",
+           f"squared-envelope spectrum in the band of largest envelope kurtosis "
+           f"{rs.band[0]:.0f}-{rs.band[1]:.0f} Hz, resolution {rs.envelope.resolution:.3f} Hz",
+           table(("line", "expected Hz", "peak Hz", "dB over floor"), rows,
+                 ("{}", "{:.3f}", "{:.3f}", "{:.1f}")),
+           "(a line over ~10 dB stands out of the envelope's floor: the median between 1 and 20 x the shaft)"]
+    if rs.overlay is not None:
+        ov = rs.overlay
+        out.append(f"overlay: {ov.source} at {ov.sample_rate:g} Hz, band {ov.band[0]:.0f}-{ov.band[1]:.0f} Hz"
+                   + (f", shaft {60 * ov.shaft_hz:.1f} rpm" if ov.shaft_hz else ""))
+    return "\n".join(out)

@@ -111,17 +111,31 @@ class Assessment:
     nominal_angle: float
 
 
+def _contact_limits_jit():
+    """:func:`bearingsim.limits.contact_limits` as one compiled program (cached on disk), not
+    some thirty small eager ones: a warm ``bearingsim static`` loads one program instead."""
+    global _LIMITS_JIT
+    if _LIMITS_JIT is None:
+        from .limits import contact_limits
+        from .xla import jit
+
+        _LIMITS_JIT = jit(contact_limits)
+    return _LIMITS_JIT
+
+
+_LIMITS_JIT = None
+
+
 def assess_case(case, sol) -> Assessment:
     """Per-contact limits (MODEL.md 11: pressure, the friction raceway control needs, the
     ellipse against the shoulders) and, when the case gives ``bearing.dynamic_load_rating_kN``,
     the ISO/TS 16281 rating life of the state ``sol`` of ``case`` (single state)."""
     from . import life
-    from .limits import contact_limits
 
     b, op = case.bearing(), case.operation()
     st = case.limits_settings()
-    lim = contact_limits(sol, b, op.control, pressure_limit=st["pressure_limit"],
-                         friction_coefficient=st["friction_coefficient"])
+    lim = _contact_limits_jit()(sol, b, op.control, pressure_limit=st["pressure_limit"],
+                                friction_coefficient=st["friction_coefficient"])
     alpha = float(b.free_contact_angle) if bool(b.angular_contact) else 0.0
     L = rings = hours = None
     C = st["dynamic_load_rating"]

@@ -445,3 +445,118 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
         want = background_signal(r, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, bg)
         assert np.allclose(x3[i] - x2[i], want, atol=3e-6 * max(1.0, np.abs(x3[i]).max()))
         assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
+
+
+# ----------------------------------------------------------------- the ML reader (bearingsim.mldata)
+def test_load_dataset_reads_arrays_labels_and_metadata(files, tmp_path):
+    import bearingsim
+    from bearingsim.dataset import CLASSES, SPLITS
+    from bearingsim.mldata import SPLITS as READER_SPLITS
+
+    _, a, _, _, _ = files
+    X, L, meta = bearingsim.load_dataset(a)
+    with h5py.File(a, "r") as f:
+        assert np.array_equal(X, f["signals"][()]) and L.tobytes() == f["labels"][()].tobytes()
+    assert X.dtype == np.float32 and X.shape == (6, 480)
+    assert meta["sample_rate_Hz"] == 24000.0 and meta["duration_s"] == pytest.approx(0.02)
+    assert meta["class_names"] == list(CLASSES) and isinstance(meta["class_names"], list)
+    assert READER_SPLITS == SPLITS and meta["split_names"] == list(SPLITS)
+    assert meta["field_units"]["speed_rpm"] == "rpm" and meta["signal_units"] == "m/s^2"
+    assert meta["count"] == 6 and meta["seed"] == 7 and meta["failed_dropped"] == 0
+    # the splits partition the items: every item in exactly one, the rows are the file's rows
+    parts = [bearingsim.load_dataset(a, split=s) for s in SPLITS]
+    rows = np.concatenate([m["rows"] for _, _, m in parts])
+    assert sorted(rows) == list(range(6))
+    for code, (x, lab, m) in enumerate(parts):
+        assert np.all(lab["split"] == code) and np.array_equal(x, X[m["rows"]])
+    with pytest.raises(bearingsim.InputError, match="split 'val'"):
+        bearingsim.load_dataset(a, split="val")
+    bad = tmp_path / "x.h5"
+    bad.write_text("not hdf5")
+    with pytest.raises(bearingsim.InputError, match="not an HDF5 data set"):
+        bearingsim.load_dataset(bad)
+    with h5py.File(tmp_path / "other.h5", "w") as f:
+        f["x"] = np.zeros(3)
+    with pytest.raises(bearingsim.InputError, match="not a bearingsim data set"):
+        bearingsim.load_dataset(tmp_path / "other.h5")
+
+
+def test_load_dataset_leaves_failed_items_out(files, tmp_path):
+    import shutil
+
+    from bearingsim import load_dataset
+
+    _, a, _, _, _ = files
+    c = tmp_path / "c.h5"
+    shutil.copy(a, c)
+    with h5py.File(c, "r+") as f:
+        lab = f["labels"][()]
+        lab["result"][1] = 3
+        f["labels"][...] = lab
+    X, L, meta = load_dataset(c)
+    assert len(X) == 5 and 1 not in L["index"] and meta["failed_dropped"] == 1
+    assert len(load_dataset(c, include_failed=True)[0]) == 6
+
+
+def test_window_dataset_windows_items_of_one_split(files):
+    from bearingsim import WindowDataset, load_dataset
+    from bearingsim.features import FEATURE_NAMES
+
+    _, a, _, _, _ = files
+    X, L, _ = load_dataset(a)
+    ds = WindowDataset(a, split=None, window=200, hop=100)
+    assert ds.per_item == 3 and len(ds) == 18          # starts 0, 100, 200 (+200 <= 480)
+    x, y = ds[4]                                         # item 1, window 1
+    assert x.shape == (1, 200) and x.dtype == np.float32 and y == int(L["fault_class"][1])
+    assert np.array_equal(x[0], X[1, 100:300])
+    assert np.array_equal(ds[-1][0][0], X[5, 200:400])
+    with pytest.raises(IndexError):
+        ds[18]
+    Xw, yw = ds.arrays()
+    assert Xw.shape == (18, 200) and np.array_equal(yw, np.repeat(L["fault_class"], 3))
+    assert np.array_equal(ds.groups(), np.repeat(L["index"], 3))
+    # windows in seconds, and the splits: no item in two of them
+    per = {s: WindowDataset(a, split=s, window_s=0.01) for s in ("train", "validation", "test")}
+    assert sum(len(d) for d in per.values()) == 12
+    seen = [set(d.groups()) for d in per.values()]
+    assert not (seen[0] & seen[1] or seen[0] & seen[2] or seen[1] & seen[2])
+    # features: window_features of the same windows at each item's labelled shaft speed
+    f = WindowDataset(a, split=None, window=480, features=True)
+    v, y = f[2]
+    assert v.shape == (len(FEATURE_NAMES),) and v.dtype == np.float32 and np.all(np.isfinite(v))
+    from bearingsim.case import parse_case
+    from bearingsim.features import fault_orders, window_features
+
+    _, _, meta = load_dataset(a)
+    ref = window_features(X[2:3].astype(float), 24000.0, L["shaft_Hz"][2],
+                          fault_orders(parse_case(meta["case_toml"]).bearing()))[0]
+    assert np.allclose(v, ref, rtol=1e-5, atol=1e-4)
+    from bearingsim import InputError
+    with pytest.raises(InputError, match="window 481 samples"):
+        WindowDataset(a, split=None, window=481)
+
+
+def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
+    from bearingsim import workflows
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake(case, out, **kw):
+        seen.append(case)
+        raise Stop
+
+    monkeypatch.setattr(workflows, "dataset_case", fake)
+    p = tmp_path / "spec.toml"
+    p.write_text(spec().text)
+    with pytest.raises(Stop):
+        main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--count", "4", "--seed", "11",
+              "--duration-s", "0.01"])
+    ds = seen[0].data["dataset"]
+    assert (ds["count"], ds["seed"], ds["duration_s"]) == (4, 11, 0.01)
+    assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--count", "0"]) == 2
+    assert "--count 0" in capsys.readouterr().err
+    assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--duration-s", "-1"]) == 2
+    assert "--duration-s -1" in capsys.readouterr().err

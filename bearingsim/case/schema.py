@@ -341,7 +341,8 @@ SCHEMA: dict[str, Section] = {
                               "preload / (bearings facing that way) at standstill", "N", OPTIONAL, ge=0),
             "preload_class": _enum("preload class instead of preload_N: light / medium / heavy = "
                                    "0.3 / 0.6 / 1.2 % of the bearing's static axial capacity C_0a "
-                                   "(p_max = 4.2 GPa at standstill)", ("light", "medium", "heavy"),
+                                   "(p_max = 4.2 GPa at standstill): bearingsim's own convention, not a "
+                                   "catalogue's classes", ("light", "medium", "heavy"),
                                    OPTIONAL),
             "preloads_N": Key("numbers", "preload of each bearing (N): its thrust at standstill "
                               "(rigid), or its constant spring force (spring_bearings)", "N", OPTIONAL),
