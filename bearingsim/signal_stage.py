@@ -46,7 +46,7 @@ from .xla import jit
 
 __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_keys", "stream_key",
            "draw_items", "draw_background", "background_draws", "background_record", "synthesize_background",
-           "background_labels", "shape_noise", "psd_grid", "pass_factors", "pass_shifts", "strike_factors",
+           "background_labels", "poisson_capped", "shape_noise", "psd_grid", "pass_factors", "pass_shifts", "strike_factors",
            "vary_passes", "discretise_modes", "run_modes", "measurement_noise", "fault_level", "finish_item",
            "finish_items", "LABELS"]
 
@@ -210,6 +210,26 @@ def psd_grid(fs) -> np.ndarray:
     return np.geomspace(50.0, max(0.45 * float(fs), 100.0), 48)
 
 
+class _Uniforms:
+    """Consecutive slices of one vector of uniforms (one random-bits kernel for many draws)."""
+
+    def __init__(self, key, n):
+        self.u, self.i = jax.random.uniform(key, (n,), jnp.float64), 0
+
+    def take(self, shape=()):
+        k = int(np.prod(shape))
+        v = self.u[self.i:self.i + k].reshape(shape)
+        self.i += k
+        return v
+
+    def uniform(self, lo, hi, shape=()):
+        lo, hi = float(lo), float(hi)
+        return lo + (hi - lo) * self.take(shape)
+
+    def logu(self, lo, hi, shape=()):
+        return jnp.exp(self.uniform(np.log(float(lo)), np.log(float(hi)), shape))
+
+
 def draw_background(key, fs, ranges=None) -> Background:
     """A :class:`~bearingsim.background.Background` of JAX arrays drawn from ``ranges`` (default
     :data:`~bearingsim.background.BACKGROUND_DEFAULTS`), with the distributions of
@@ -218,39 +238,38 @@ def draw_background(key, fs, ranges=None) -> Background:
     log-Gaussian bumps (unused bump slots masked), modulation depths strong (uniform in
     ``modulation_depth``) with probability ``modulation_strong`` else uniform 0-0.03."""
     r = dict(BACKGROUND_DEFAULTS, **(ranges or {}))
-    k = jax.random.split(key, 18)
     top = 0.45 * float(fs)
-    rms = _logu(k[0], *r["noise_rms_m_s2"])
     K, L = int(r["shaft_harmonics"]), int(r["line_harmonics"])
-    sa = rms * _logu(k[1], *r["shaft_relative"], (K,))
-    lfs = jnp.asarray(r["line_frequency_Hz"], jnp.float64)
-    lf = lfs[jax.random.randint(k[2], (), 0, lfs.shape[0])]
-    la = rms * _logu(k[3], *r["line_relative"], (L,))
-    grid = psd_grid(fs)
-    tilt = _uniform(k[4], *r["psd_tilt_db_per_octave"])
-    base = 10.0 ** (tilt * jnp.log2(grid / grid[0]) / 10.0)
     b_lo, b_hi = int(r["psd_bumps"][0]), int(r["psd_bumps"][1])
-    nb = jax.random.randint(k[5], (), b_lo, b_hi + 1)
-    fc = _logu(k[6], r["psd_bump_Hz"][0], min(r["psd_bump_Hz"][1], top), (b_hi,))
-    h = 10.0 ** (_uniform(k[7], *r["psd_bump_db"], (b_hi,)) / 10.0)
-    w = _uniform(k[8], *r["psd_bump_octaves"], (b_hi,))
+    Km, Lm = int(r["modulation_harmonics"]), int(r["line_modulation_harmonics"])
+    u = _Uniforms(key, 9 + K + L + 3 * b_hi + 3 * (Km + Lm))
+    rms = u.logu(*r["noise_rms_m_s2"])
+    sa = rms * u.logu(*r["shaft_relative"], (K,))
+    lfs = jnp.asarray(r["line_frequency_Hz"], jnp.float64)
+    lf = lfs[jnp.minimum(jnp.floor(u.take() * lfs.shape[0]).astype(jnp.int32), lfs.shape[0] - 1)]
+    la = rms * u.logu(*r["line_relative"], (L,))
+    grid = psd_grid(fs)
+    tilt = u.uniform(*r["psd_tilt_db_per_octave"])
+    base = 10.0 ** (tilt * jnp.log2(grid / grid[0]) / 10.0)
+    nb = b_lo + jnp.floor(u.take() * (b_hi - b_lo + 1))
+    fc = u.logu(r["psd_bump_Hz"][0], min(r["psd_bump_Hz"][1], top), (b_hi,))
+    h = 10.0 ** (u.uniform(*r["psd_bump_db"], (b_hi,)) / 10.0)
+    w = u.uniform(*r["psd_bump_octaves"], (b_hi,))
     on = jnp.arange(b_hi) < nb
     bumps = jnp.sum(jnp.where(on[:, None], h[:, None] * jnp.exp(-0.5 * (jnp.log2(grid[None] / fc[:, None])
                                                                            / w[:, None]) ** 2), 0.0), 0)
     power = base * (1.0 + bumps)
-    Km, Lm = int(r["modulation_harmonics"]), int(r["line_modulation_harmonics"])
     p_strong = float(r["modulation_strong"])
 
-    def depths(ka, kb, kc, n):
-        strong = jax.random.uniform(ka, (n,)) < p_strong
-        return jnp.where(strong, _uniform(kb, *r["modulation_depth"], (n,)), _uniform(kc, 0.0, 0.03, (n,)))
-    md = depths(k[9], k[10], k[11], Km)
-    lmd = depths(k[12], k[13], k[14], Lm)
-    kr = _uniform(k[15], *r["knock_rate_Hz"])
-    ka = rms * _logu(k[16], *r["knock_relative"])
-    k2 = jax.random.split(k[17])
-    kf = _logu(k2[0], r["knock_Hz"][0], min(r["knock_Hz"][1], top))
-    kz = _uniform(k2[1], *r["knock_damping"])
+    def depths(n):
+        strong = u.take((n,)) < p_strong
+        return jnp.where(strong, u.uniform(*r["modulation_depth"], (n,)), u.uniform(0.0, 0.03, (n,)))
+    md = depths(Km)
+    lmd = depths(Lm)
+    kr = u.uniform(*r["knock_rate_Hz"])
+    ka = rms * u.logu(*r["knock_relative"])
+    kf = u.logu(r["knock_Hz"][0], min(r["knock_Hz"][1], top))
+    kz = u.uniform(*r["knock_damping"])
     return Background(sa, lf, la, rms, jnp.asarray(grid), 10.0 * jnp.log10(power), md, kr, ka, kf, kz, lmd)
 
 
@@ -276,20 +295,29 @@ class BackgroundDraws(NamedTuple):
     knock_signs: jnp.ndarray         # (Kmax,) +-1, 0 in unused slots
 
 
+def poisson_capped(u, lam, cap):
+    """The Poisson(``lam``) count of the uniform ``u`` by inverting its CDF, capped at ``cap``
+    (exact below the cap; no rejection loop to compile)."""
+    k = jnp.arange(cap, dtype=jnp.float64)
+    cdf = jnp.cumsum(jnp.exp(jax.scipy.special.xlogy(k, lam) - lam - jax.scipy.special.gammaln(k + 1.0)))
+    return jnp.sum(cdf < u)
+
+
 def background_draws(key, bg: Background, n, fs, knock_max) -> BackgroundDraws:
     """The random numbers of one record of ``bg``: uniform phases, ``n`` standard normals, a
     Poisson knock count at ``knock_rate n / fs`` (capped at ``knock_max``), uniform knock times
     and signs."""
-    k = jax.random.split(key, 8)
-    ph = lambda kk, v: jax.random.uniform(kk, (len(v) if isinstance(v, tuple) else jnp.shape(v)[0],), maxval=2 * np.pi)  # noqa: E731
-    lam = jnp.asarray(bg.knock_rate, jnp.float64) * (n / float(fs))
-    count = jax.random.poisson(k[5], lam)
-    times = jax.random.uniform(k[6], (knock_max,), maxval=n / float(fs))
-    signs = jnp.where(jax.random.bernoulli(k[7], 0.5, (knock_max,)), 1.0, -1.0)
+    kn, ku = jax.random.split(key)
+    size = lambda v: len(v) if isinstance(v, tuple) else jnp.shape(v)[0]  # noqa: E731
+    sizes = [size(v) for v in (bg.shaft_amplitudes, bg.line_amplitudes, bg.modulation_depths,
+                               bg.line_modulation_depths)]
+    u = _Uniforms(ku, sum(sizes) + 1 + 2 * knock_max)
+    sp, lp, mp, lmp = (u.uniform(0.0, 2 * np.pi, (m,)) for m in sizes)
+    count = poisson_capped(u.take(), jnp.asarray(bg.knock_rate, jnp.float64) * (n / float(fs)), knock_max)
+    times = u.uniform(0.0, n / float(fs), (knock_max,))
+    signs = jnp.where(u.take((knock_max,)) < 0.5, 1.0, -1.0)
     signs = jnp.where(jnp.arange(knock_max) < count, signs, 0.0)
-    return BackgroundDraws(ph(k[0], bg.shaft_amplitudes), ph(k[1], bg.line_amplitudes),
-                           jax.random.normal(k[2], (int(n),), jnp.float64), ph(k[3], bg.modulation_depths),
-                           ph(k[4], bg.line_modulation_depths), times, signs)
+    return BackgroundDraws(sp, lp, jax.random.normal(kn, (int(n),), jnp.float64), mp, lmp, times, signs)
 
 
 def shape_noise(x, fs, rms, frequencies, levels_db):
@@ -313,17 +341,35 @@ def shape_noise(x, fs, rms, frequencies, levels_db):
 
 
 def _lines(t, f0, amps, phases, fs):
-    k = jnp.arange(1, jnp.shape(amps)[0] + 1, dtype=jnp.float64)
-    on = k * f0 < 0.5 * fs
-    a = jnp.where(on, amps, 0.0)
-    return jnp.sum(a[:, None] * jnp.cos(2 * np.pi * (k * f0)[:, None] * t[None] + phases[:, None]), 0)
+    """sum_k a_k cos(2 pi k f0 t + p_k) over the harmonics k = 1..K below ``fs`` / 2."""
+    x = jnp.zeros_like(t)
+    for k in range(1, jnp.shape(amps)[0] + 1):          # a few harmonics: one fused element-wise kernel
+        a = jnp.where(k * f0 < 0.5 * fs, amps[k - 1], 0.0)
+        x = x + a * jnp.cos(2 * np.pi * (k * f0) * t + phases[k - 1])
+    return x
 
 
-def _ring(t, f, zeta):
+def _knocks(n, fs, times, amplitudes, f, zeta):
+    """sum_j a_j exp(-zeta w tau) sin(w_d tau), tau = t - t_j, over the samples i0_j <= i <
+    i0_j + L (i0 = floor(t_j fs), L = floor(20 / (zeta w) fs) + 1): a complex one-pole recursion
+    y_i = exp(lambda / fs) y_{i-1} + u_i (lambda = -zeta w + i w_d) with each knock entering at
+    its first sample after t_j and leaving at i0 + L; its imaginary part (an associative scan)."""
     wn = 2 * np.pi * f
-    wd = wn * jnp.sqrt(jnp.maximum(1.0 - zeta * zeta, 1e-12))
-    tt = jnp.maximum(t, 0.0)
-    return jnp.where(t >= 0, jnp.exp(-zeta * wn * tt) * jnp.sin(wd * tt), 0.0)
+    lam = -zeta * wn + 1j * wn * jnp.sqrt(jnp.maximum(1.0 - zeta * zeta, 1e-12))
+    i0 = jnp.floor(times * fs)
+    L = jnp.floor(20.0 / (zeta * wn) * fs) + 1.0
+    on, off = i0 + 1.0, i0 + L
+    ins = amplitudes * jnp.exp(lam * (on / fs - times))
+    outs = -amplitudes * jnp.exp(lam * (off / fs - times))
+    idx = jnp.concatenate([on, jnp.where(L > 1.0, off, n + 1.0)])
+    idx = jnp.where(idx < n, idx, n).astype(jnp.int32)           # n: dropped
+    u = jnp.zeros(n, lam.dtype).at[idx].add(jnp.concatenate([ins, outs]), mode="drop")
+    a = jnp.broadcast_to(jnp.exp(lam / fs), (n,))
+
+    def combine(x, y):
+        return x[0] * y[0], y[0] * x[1] + y[1]
+    _, y = jax.lax.associative_scan(combine, (a, u))
+    return jnp.imag(y)
 
 
 def synthesize_background(bg: Background, draws: BackgroundDraws, fs, shaft_hz):
@@ -334,23 +380,17 @@ def synthesize_background(bg: Background, draws: BackgroundDraws, fs, shaft_hz):
     fs = float(fs)
     n = draws.noise.shape[0]
     t = jnp.arange(n) / fs
-    x = _lines(t, shaft_hz, jnp.asarray(bg.shaft_amplitudes, jnp.float64), draws.shaft_phases, fs)
-    x = x + _lines(t, bg.line_frequency, jnp.asarray(bg.line_amplitudes, jnp.float64), draws.line_phases, fs)
-    noise = shape_noise(draws.noise, fs, bg.noise_rms, bg.psd_frequencies, bg.psd_levels_db)
+    sa, la = jnp.asarray(bg.shaft_amplitudes, jnp.float64), jnp.asarray(bg.line_amplitudes, jnp.float64)
     md, lm = jnp.asarray(bg.modulation_depths, jnp.float64), jnp.asarray(bg.line_modulation_depths, jnp.float64)
+    x = _lines(t, shaft_hz, sa, draws.shaft_phases, fs) + _lines(t, bg.line_frequency, la, draws.line_phases, fs)
+    noise = shape_noise(draws.noise, fs, bg.noise_rms, bg.psd_frequencies, bg.psd_levels_db)
     if md.shape[0] or lm.shape[0]:
         env = 1.0 + _lines(t, shaft_hz, md, draws.modulation_phases, np.inf) \
             + _lines(t, bg.line_frequency, lm, draws.line_modulation_phases, np.inf)
         noise = noise * jnp.maximum(env, 0.0)
-    x = x + noise
-    tk = draws.knock_times
-    i0 = jnp.floor(tk * fs)
-    length = jnp.floor(20.0 / (bg.knock_damping * 2 * np.pi * bg.knock_frequency) * fs) + 1.0
-    i = jnp.arange(n, dtype=jnp.float64)
-    inside = (i[None] >= i0[:, None]) & (i[None] < i0[:, None] + length)
-    ring = _ring(t[None] - tk[:, None], bg.knock_frequency, bg.knock_damping)
-    knocks = jnp.sum(jnp.where(inside, (draws.knock_signs * bg.knock_amplitude)[:, None] * ring, 0.0), 0)
-    return x + knocks
+    knocks = _knocks(n, fs, draws.knock_times, draws.knock_signs * bg.knock_amplitude, bg.knock_frequency,
+                     bg.knock_damping)
+    return x + noise + knocks
 
 
 def background_record(key, bg: Background, n, fs, shaft_hz, knock_max):
@@ -388,9 +428,17 @@ def strike_factors(key, n, probability):
     return (jax.random.uniform(key, (n,)) < probability).astype(jnp.float64)
 
 
-def _ramp(t, edge, width):
-    u = jnp.clip((t - edge) / width + 0.5, 0.0, 1.0)
-    return 0.5 - 0.5 * jnp.cos(np.pi * u)
+def _ramp(t, sin_a, cos_a, edge, width):
+    """The raised-cosine ramp 0 -> 1 of ``width`` centred on ``edge`` (+inf: 0) at the samples
+    ``t``: ``0.5 + 0.5 sin(pi (t - e) / w)`` inside, by the angle-difference formula from
+    ``sin_a``, ``cos_a`` = sin, cos of ``pi t / w`` (no transcendental per sample and edge)."""
+    fin = jnp.isfinite(edge)
+    e = jnp.where(fin, edge, 0.0)
+    b = np.pi * e / width
+    inner = 0.5 + 0.5 * (sin_a * jnp.cos(b) - cos_a * jnp.sin(b))
+    d = t - e
+    r = jnp.where(d <= -0.5 * width, 0.0, jnp.where(d >= 0.5 * width, 1.0, inner))
+    return jnp.where(fin, r, 0.0)
 
 
 def _delay(y, d):
@@ -415,12 +463,20 @@ def vary_passes(x, fs, pass_times, factors, shifts, lead=0.15, taper=0.1):
     T = jnp.where(k > 1, _mean_interval(tp), jnp.maximum(t[-1], 1.0 / float(fs)))
     m = jnp.mean(x)
     xc = x - m
-    up = _ramp(t[None], (tp - lead * T)[:, None], taper * T)            # (P, n)
-    win = jnp.concatenate([jnp.ones((1, n)), up]) - jnp.concatenate([up, jnp.zeros((1, n))])
-    pieces = factors[:, None] * win * xc[None]
-    moved = jax.vmap(_delay)(pieces, shifts * float(fs))
-    pieces = jnp.where((shifts != 0.0)[:, None], moved, pieces)
-    return jnp.sum(pieces, 0) + m
+    edges, w = tp - lead * T, taper * T
+    P = tp.shape[0]
+    sin_a, cos_a = jnp.sin(np.pi * t / w), jnp.cos(np.pi * t / w)
+    up = lambda j: jnp.where(j < P, _ramp(t, sin_a, cos_a, edges[jnp.minimum(j, P - 1)], w), 0.0)  # noqa: E731
+
+    def piece(j, carry):            # pieces one at a time: memory O(n) per item
+        acc, prev = carry
+        nxt = up(j)
+        y = factors[j] * (prev - nxt) * xc
+        y = jnp.where(shifts[j] != 0.0, _delay(y, shifts[j] * float(fs)), y)
+        return acc + y, nxt
+    # the pieces after the last finite pass are 0: the loop stops there
+    acc, _ = jax.lax.fori_loop(0, k + 1, piece, (jnp.zeros(n), jnp.ones(n)))
+    return acc + m
 
 
 # --- sensor path and noise ------------------------------------------------------------------
