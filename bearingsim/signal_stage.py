@@ -342,10 +342,17 @@ def shape_noise(x, fs, rms, frequencies, levels_db):
 
 def _lines(t, f0, amps, phases, fs):
     """sum_k a_k cos(2 pi k f0 t + p_k) over the harmonics k = 1..K below ``fs`` / 2."""
+    K = jnp.shape(amps)[0]
     x = jnp.zeros_like(t)
-    for k in range(1, jnp.shape(amps)[0] + 1):          # a few harmonics: one fused element-wise kernel
+    if not K:
+        return x
+    th = 2 * np.pi * f0 * t
+    c1, s1 = jnp.cos(th), jnp.sin(th)
+    c, s, c_prev, s_prev = c1, s1, jnp.ones_like(t), jnp.zeros_like(t)
+    for k in range(1, K + 1):   # cos k th, sin k th by the Chebyshev recurrence: one fused kernel
         a = jnp.where(k * f0 < 0.5 * fs, amps[k - 1], 0.0)
-        x = x + a * jnp.cos(2 * np.pi * (k * f0) * t + phases[k - 1])
+        x = x + a * (c * jnp.cos(phases[k - 1]) - s * jnp.sin(phases[k - 1]))
+        c, s, c_prev, s_prev = 2.0 * c1 * c - c_prev, 2.0 * c1 * s - s_prev, c, s
     return x
 
 
