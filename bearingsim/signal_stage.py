@@ -473,7 +473,10 @@ def vary_passes(x, fs, pass_times, factors, shifts, lead=0.15, taper=0.1):
     edges, w = tp - lead * T, taper * T
     P = tp.shape[0]
     sin_a, cos_a = jnp.sin(np.pi * t / w), jnp.cos(np.pi * t / w)
-    up = lambda j: jnp.where(j < P, _ramp(t, sin_a, cos_a, edges[jnp.minimum(j, P - 1)], w), 0.0)  # noqa: E731
+    if P:
+        up = lambda j: jnp.where(j < P, _ramp(t, sin_a, cos_a, edges[jnp.minimum(j, P - 1)], w), 0.0)  # noqa: E731
+    else:
+        up = lambda j: jnp.zeros(n)  # noqa: E731
 
     def piece(j, carry):            # pieces one at a time: memory O(n) per item
         acc, prev = carry

@@ -21,7 +21,7 @@ def rel_err(a, b):
 
 # --- pass-to-pass variability ---------------------------------------------------------------
 
-@pytest.mark.parametrize("npass,pad", [(9, 4), (1, 3), (0, 2), (12, 0)])
+@pytest.mark.parametrize("npass,pad", [(9, 4), (1, 3), (0, 2), (12, 0), (0, 0)])
 def test_vary_passes_equals_numpy_for_the_same_factors(npass, pad):
     rng = np.random.default_rng(npass)
     n = 2400
@@ -294,8 +294,11 @@ def test_finish_items_is_reproducible_chunk_independent_and_vmap_equals_per_item
     again, lab2 = run(st, idx, inp)
     assert np.asarray(out).tobytes() == np.asarray(again).tobytes()
     assert all(np.array_equal(lab[k], lab2[k]) for k in lab)
-    part, _ = run(st, idx[2:5], inp)                  # another chunk size, same items: same rows
-    assert np.allclose(part, out[2:5], rtol=0, atol=1e-13 * float(np.abs(out).max()))
+    # another chunk size, same items: the same bytes (a chunk of one item is compiled without a
+    # batch axis: its rows may differ in the last bits, so data sets never run chunks of one)
+    part, lp = run(st, idx[2:5], inp)
+    assert np.asarray(part).tobytes() == np.asarray(out[2:5]).tobytes()
+    assert all(np.array_equal(lp[k], lab[k][2:5]) for k in lab)
     other, _ = run(st, idx, inp, keys=ss.item_keys(1, idx))
     assert np.all(np.any(np.asarray(other) != np.asarray(out), axis=1))
     keys = ss.item_keys(0, idx)
