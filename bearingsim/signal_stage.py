@@ -46,7 +46,8 @@ from .xla import jit
 
 __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_keys", "stream_key",
            "draw_items", "draw_background", "background_draws", "background_record", "synthesize_background",
-           "background_labels", "poisson_capped", "shape_noise", "psd_grid", "pass_factors", "pass_shifts", "strike_factors",
+           "background_labels", "poisson_capped", "shape_noise", "psd_grid", "pass_factors", "pass_shifts",
+           "strike_factors",
            "vary_passes", "discretise_modes", "run_modes", "measurement_noise", "fault_level", "finish_item",
            "finish_items", "LABELS"]
 
@@ -134,7 +135,8 @@ class SignalSettings:
         exceeds with probability <= :data:`KNOCK_TAIL` (at least 1)."""
         from scipy.stats import poisson
 
-        rate = float(Background(*self.machine).knock_rate) if self.background == "machine" else float(self.ranges["knock_rate_Hz"][1])
+        machine = self.background == "machine"
+        rate = float(Background(*self.machine).knock_rate) if machine else float(self.ranges["knock_rate_Hz"][1])
         lam = rate * self.samples / self.fs
         return max(1, int(poisson.isf(KNOCK_TAIL, lam)) + 1) if lam > 0 else 1
 

@@ -143,7 +143,8 @@ def test_drawn_backgrounds_are_in_their_ranges(drawn):
     assert np.all(lv <= 3.0 * octaves + 10 * np.log10(1 + 4 * 10 ** 2.5) + 1e-9)
     assert np.all(lv >= -6.0 * octaves - 10 * np.log10(1 + 4 * 10 ** 2.5) - 1e-9)
     lab = jax.vmap(ss.background_labels)(drawn)
-    assert np.allclose(lab["background_shaft_rms_m_s2"], np.sqrt(0.5 * np.sum(b["shaft_amplitudes"] ** 2, 1)), rtol=1e-14)
+    shaft_rms = np.sqrt(0.5 * np.sum(b["shaft_amplitudes"] ** 2, 1))
+    assert np.allclose(lab["background_shaft_rms_m_s2"], shaft_rms, rtol=1e-14)
 
 
 def test_drawn_background_lines_sit_at_their_drawn_frequencies_and_amplitudes():
