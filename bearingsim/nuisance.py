@@ -25,8 +25,10 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
     = ``ball_unloaded``).  Output: ``g(t) [(1 - c) x_n + c r(t)]`` at the RMS of the input,
     ``x_n`` the engine's signal, ``r`` the load-modulated contact noise, ``c`` =
     ``ball_noise_share``.  (4) The ball's load also varies as the inner ring's runout and
-    waviness turn under it, at n (f_r - FTF), n = 1..3: the level is multiplied by ``max(0, 1 +
-    sum_n w_n cos(2 pi n (f_r - FTF) t + phi_n))``, ``w_n`` drawn from ``ball_ring_waviness``.
+    waviness turn under it, at n (f_r - FTF), n = 1..8: the level is multiplied by ``max(0, 1 +
+    sum_n w_n cos(2 pi n (f_r - FTF) t + phi_n))``, ``w_n = w rho^(n - 1)``, ``w`` drawn from
+    ``ball_ring_waviness``, ``rho`` from ``ball_ring_decay``.  With the load zone's cage
+    harmonics k FTF this makes lines at n f_r + (k - n) FTF.
 :func:`shaft_modulation`
     Multiplies a record by ``max(0, 1 + sum_k m_k cos(2 pi k f_r t + phi_k) + sum_j l_j cos(2 pi
     (j - 1/2) f_r t + ...))``: shaft-rate amplitude modulation (runout, unbalance: ``m_1``),
@@ -42,6 +44,15 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
 :func:`fault_level`
     The fault's RMS over the background's, ``fault_snr_dB`` (down to negative dB), as the gain of
     the fault signal.
+
+Inside the data engine's chunk program (per item, vmapped): ``key = item_key(seed, index)``;
+``record, labels = item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz,
+bpfo_hz, bpfi_hz, bsf_hz, settings)`` with ``fault`` the item's bearing signal after the sensor
+path (any level: the gain is set here), ``background`` its background record (the same length),
+the frequencies of the item (labels ``shaft_Hz``, ``ftf_Hz``, ``bpfo_Hz``, ``bpfi_Hz``,
+``bsf_Hz``), ``settings`` one static dict for the whole data set (``fault_snr_dB`` from the spec;
+the switches of :data:`INGREDIENTS`).  Until the engine does so, ``bearingsim.transfer.
+composed_dataset`` applies it after the engine (same function, same keys).
 """
 from __future__ import annotations
 
@@ -65,6 +76,7 @@ NUISANCE_DEFAULTS = {
     "ball_noise_Hz": (1500.0, 5500.0),      # contact-noise band centre (log)
     "ball_noise_damping": (0.03, 0.2),      # its damping ratio
     "ball_ring_waviness": (0.2, 0.8),       # load modulation by the inner ring turning under the ball
+    "ball_ring_decay": (0.5, 1.0),          # ratio of successive ring orders' depths (n = 1..8)
     # shaft-synchronous modulation (shaft_modulation)
     "shaft_am_depth": (0.0, 0.5),           # m_1: shaft-rate AM depth
     "misalignment_depth": (0.0, 0.3),       # m_2: 2 x shaft
@@ -81,8 +93,9 @@ NUISANCE_DEFAULTS = {
     "near_line_offset_percent": (0.3, 3.0), # |delta| of a non-fault line near a bearing order
     "near_line_depth": (0.2, 1.0),          # its modulation depth of a band noise ...
     "near_line_relative": (0.2, 1.0),       # ... at this RMS / background RMS
-    "knock_rate_Hz": (0.0, 40.0),           # impulsive knocks, every class
-    "knock_relative": (1.0, 15.0),          # knock peak / background RMS (log)
+    "knock_probability": 0.3,               # impulsive knocks present (every class) ...
+    "knock_rate_Hz": (0.0, 20.0),           # ... at this rate
+    "knock_relative": (1.0, 10.0),          # knock peak / background RMS (log)
     "knock_Hz": (1000.0, 5500.0),           # ringing resonance (log)
     "knock_damping": (0.01, 0.08),
     "knock_max": 16,                        # static: the most knocks a record can hold
@@ -179,10 +192,10 @@ def ball_fault_modulation(key, fault, fs, shaft_hz, ftf_hz, bsf_hz, settings=Non
     burst = jnp.exp(-0.5 * (d / (0.5 * edge)) ** 2)
     q = load_zone_factor(2.0 * jnp.pi * (ftf_hz * t + psi0), eps)
     level = unloaded + (1.0 - unloaded) * q ** gamma
-    kw = jax.random.split(jax.random.fold_in(key, 2), 2)
-    wn = jax.random.uniform(kw[0], (3,), jnp.float64, *s["ball_ring_waviness"])
-    pw = jax.random.uniform(kw[1], (3,), jnp.float64, 0.0, 2 * jnp.pi)
-    nn = jnp.arange(1, 4.0)
+    kw = jax.random.split(jax.random.fold_in(key, 2), 3)
+    nn = jnp.arange(1, 9.0)
+    wn = _u(kw[0], s["ball_ring_waviness"]) * _u(kw[2], s["ball_ring_decay"]) ** (nn - 1.0)
+    pw = jax.random.uniform(kw[1], (8,), jnp.float64, 0.0, 2 * jnp.pi)
     wav = 1.0 + jnp.sum(wn[:, None] * jnp.cos(2 * jnp.pi * nn[:, None] * (shaft_hz - ftf_hz) * t + pw[:, None]), 0)
     level = level * jnp.maximum(wav, 0.0)
     noise = band_noise(jax.random.fold_in(key, 1), T, fs, f0, zeta)
@@ -253,7 +266,7 @@ def nuisance_signal(key, T, fs, shaft_hz, ftf_hz, bpfo_hz, bpfi_hz, bsf_hz, rms,
     # impulsive knocks (every class)
     kk = jax.random.split(ks[18], 5)
     K = int(s["knock_max"])
-    rate = _u(kk[0], s["knock_rate_Hz"])
+    rate = _u(kk[0], s["knock_rate_Hz"]) * (jax.random.uniform(jax.random.fold_in(key, 8), ()) < s["knock_probability"])
     on = jax.random.uniform(kk[1], (K,)) < jnp.minimum(rate * T / fs / K, 1.0)
     tk = jax.random.uniform(kk[2], (K,), jnp.float64, 0.0, T / fs)
     pk = jnp.exp(jax.random.uniform(kk[3], (K,), jnp.float64, *jnp.log(jnp.array(s["knock_relative"]))))

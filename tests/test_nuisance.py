@@ -73,7 +73,7 @@ def test_a_near_line_is_near_its_bearing_order_and_not_on_it():
 
 def test_knocks_make_a_healthy_record_impulsive():
     s = _fixed(shaft_line_relative=0.0, looseness_probability=0.0, rub_probability=0.0, near_line_probability=0.0,
-               knock_rate_Hz=20.0, knock_relative=10.0)
+               knock_rate_Hz=20.0, knock_relative=10.0, knock_probability=1.0)
     x, _ = nu.nuisance_signal(jax.random.PRNGKey(2), T, FS, 30.0, 12.0, 107.0, 162.0, 70.0, 1.0, s)
     noise = np.random.default_rng(0).normal(size=T)
     y = noise + np.asarray(x)

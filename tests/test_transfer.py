@@ -129,11 +129,12 @@ def test_plot_transfer_writes_the_figure(tmp_path):
 
 #: floor of the development set (issue 26), Y-graded records (normal included), both classifiers,
 #: trained on DEV_COUNT items of the shipped spec with every issue 26 ingredient, tested on the
-#: first DEV_WINDOWS windows (0.2 s) of every Y-graded record: measured (2026-11-25) see
-#: docs/realism.md; set just under it
-DEV_COUNT = 160
-DEV_WINDOWS = 20
-FLOOR_DEV_Y = 0.60
+#: first DEV_WINDOWS windows (0.2 s) of every Y-graded record: measured 0.728 (RF) and 0.747 (LR)
+#: (2026-11-25; ball recall 0.03 / 0.10: the target >= 0.95 is not met, docs/realism.md); set
+#: just under it.  ~33 s of CPU on the contended 2-core machine, compilation included
+DEV_COUNT = 120
+DEV_WINDOWS = 10
+FLOOR_DEV_Y = 0.70
 
 
 @needs_data
@@ -149,4 +150,5 @@ def test_dev_set_floor(tmp_path):
                                  max_windows=DEV_WINDOWS)
     for r in reports:
         f = dev_figures(r, dev_records("Y"))
+        print(f"{r.classifier}: Y-graded balanced {f.balanced_accuracy:.3f}, recall {f.recall}")
         assert f.balanced_accuracy >= FLOOR_DEV_Y, f"{r.classifier}: {f}"
