@@ -11,7 +11,8 @@ from bearingsim.calibration import find_realdata
 from bearingsim.case import load_case
 from bearingsim.errors import InputError
 from bearingsim.features import fault_orders
-from bearingsim.transfer import CLASSES, REAL_RECORDS, Windows, evaluate, real_windows, transfer_benchmark
+from bearingsim.transfer import (CLASSES, DEV_RECORDS, REAL_RECORDS, Windows, composed_dataset, dev_figures,
+                                 dev_records, dev_text, diagnosable, evaluate, real_windows, transfer_benchmark)
 
 REPO = Path(__file__).resolve().parent.parent
 DATA = find_realdata(REPO)
@@ -68,6 +69,36 @@ def test_real_windows_are_the_six_records():
     assert [CLASSES[c] for c in np.unique(w.label)] == list(CLASSES)
 
 
+def test_dev_set_is_the_26_records_with_their_grades():
+    assert len(DEV_RECORDS) == 26
+    y, n = dev_records("Y"), dev_records("N")
+    assert len(y) == 21 and len(n) == 5 and set(y) | set(n) == set(DEV_RECORDS)
+    # graded N by every method (Smith & Randall Table B2): 118, 119, 120, 224, 225
+    assert sorted(DEV_RECORDS[k][2] for k in n) == [118, 119, 120, 224, 225]
+    assert [c for c in y.values()].count("ball") == 3 and y["cwru_normal_0hp_12k_decimated"] == "healthy"
+    assert diagnosable("-") and diagnosable("Y2 (method 3 only)") and not diagnosable("N1")
+    with pytest.raises(InputError, match="graded"):
+        dev_records("P")
+
+
+def test_dev_figures_by_hand():
+    # records a (healthy, 3 windows), b (outer, 2), c (ball, 3)
+    y = np.array([0, 0, 0, 1, 1, 3, 3, 3])
+    pred = np.array([0, 0, 1, 1, 0, 3, 2, 2])
+    g = np.array(["a", "a", "a", "b", "b", "c", "c", "c"])
+    w = Windows(np.zeros((8, 2)), y, g, np.ones(8))
+    r = evaluate(_Fixed(pred), "fixed", w, w)
+    f = dev_figures(r, ["a", "b", "c"])
+    assert f.recall == pytest.approx({"healthy": 2 / 3, "outer": 0.5, "ball": 1 / 3})
+    assert f.balanced_accuracy == pytest.approx((2 / 3 + 0.5 + 1 / 3) / 3)
+    assert f.worst_class == ("ball", pytest.approx(1 / 3))
+    # majority: a healthy (right), b a tie outer/healthy -> the lower class index (healthy: wrong), c inner (wrong)
+    assert f.votes["a"][2] == "healthy" and f.votes["c"][2] == "inner" and f.majority_right == pytest.approx(1 / 3)
+    f2 = dev_figures(r, ["a"])
+    assert f2.balanced_accuracy == pytest.approx(2 / 3) and f2.majority_right == 1.0
+    assert "every record" in dev_text([r], {"a": "-", "b": "Y1", "c": "N1"})
+
+
 @needs_data
 @pytest.mark.slow
 def test_classifiers_trained_on_simulation_recognise_real_faults(tmp_path):
@@ -94,3 +125,30 @@ def test_plot_transfer_writes_the_figure(tmp_path):
     reps = [evaluate(_Fixed([0, 1, 0, 2, 0]), name, w, w) for name in ("a", "b")]
     out = plot_transfer(reps, path=tmp_path / "t.png")
     assert out is not None and (tmp_path / "t.png").stat().st_size > 10_000
+
+
+#: floor of the development set (issue 26), Y-graded records (normal included), both classifiers,
+#: trained on DEV_COUNT items of the shipped spec with every issue 26 ingredient, tested on the
+#: first DEV_WINDOWS windows (0.2 s) of every Y-graded record: measured 0.728 (RF) and 0.747 (LR)
+#: (2026-11-25; ball recall 0.03 / 0.10: the target >= 0.95 is not met, docs/realism.md); set
+#: just under it.  ~33 s of CPU on the contended 2-core machine, compilation included
+DEV_COUNT = 120
+DEV_WINDOWS = 10
+FLOOR_DEV_Y = 0.70
+
+
+@needs_data
+@pytest.mark.slow
+def test_dev_set_floor(tmp_path):
+    pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")
+    spec = load_case("dataset_cwru_4class")
+    spec = (spec.with_value("dynamics.sample_rate_Hz", 12000).with_value("dataset.duration_s", 0.2)
+            .with_value("dataset.count", DEV_COUNT))
+    s = composed_dataset(spec, tmp_path / "train.h5")
+    assert s.failed == 0
+    reports = transfer_benchmark(tmp_path / "train.h5", DATA, fault_orders(spec.bearing()), 0.2, dev_records("Y"),
+                                 max_windows=DEV_WINDOWS)
+    for r in reports:
+        f = dev_figures(r, dev_records("Y"))
+        print(f"{r.classifier}: Y-graded balanced {f.balanced_accuracy:.3f}, recall {f.recall}")
+        assert f.balanced_accuracy >= FLOOR_DEV_Y, f"{r.classifier}: {f}"
