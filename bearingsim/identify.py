@@ -39,7 +39,8 @@ from .records import MIN_SECONDS, check_record, read_record
 __all__ = ["BANK_FS", "BANK_WINDOW_S", "BANK_SEED", "BANK_COUNT", "SLIP_MAX", "LEVEL", "CLASSES",
            "Identification", "Identifier", "bank_spec", "build_bank", "bank_features", "train_identifier",
            "default_identifier", "identify", "identify_file", "clipped_fraction", "identification_to_dict",
-           "identification_text", "twin_record", "plot_identification"]
+           "identification_text", "twin_spec", "twin_record", "plot_identification",
+           "measured_shaft_speed", "fault_kinematics", "cache_dir"]
 
 #: the bank's sample rate (Hz) and window (s): records are resampled to it and cut into windows of it
 BANK_FS = 12000.0
@@ -86,14 +87,25 @@ def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Pa
     return path
 
 
-def _item_kinematics(bearing, lab):
-    cls = np.asarray(lab["fault_class"], int)
-    fr = np.asarray(lab["shaft_Hz"], float)
-    ftf, bsf = np.asarray(lab["ftf_Hz"], float), np.asarray(lab["bsf_Hz"], float)
-    line = np.where(cls == 2, lab["bpfi_Hz"], np.where(cls == 3, 2.0 * bsf, lab["bpfo_Hz"]))
-    v = np.array([surface_speed(bearing, fr[i], CLASSES[c] if c else "outer", ftf[i], bsf[i])
-                  for i, c in enumerate(cls)])
-    return cls, fr, 1.0 / np.asarray(line, float), v
+def measured_shaft_speed(x, fs, nominal_hz) -> float:
+    """The shaft frequency (Hz) of a record: the harmonic search of
+    :func:`bearingsim.background_fit.shaft_speed` within +-10 % of ``nominal_hz``."""
+    from .background_fit import shaft_speed
+
+    return float(shaft_speed(np.asarray(x, float) - np.mean(x), fs, nominal_hz))
+
+
+def fault_kinematics(x, fs, bearing, fr, location, orders=None):
+    """(the fault line of ``location`` measured in ``x``, the contact's surface speed over the
+    defect in m/s from the measured line): FTF = BPFO / Z (outer), f_r - BPFI / Z (inner),
+    BSF = line / 2 (ball)."""
+    o = orders if orders is not None else fault_orders(bearing)
+    f_nom = {"outer": o.bpfo, "inner": o.bpfi, "ball": o.two_bsf}[location] * fr
+    line = line_frequency(np.asarray(x, float), fs, f_nom, octave_bands(fs), rel=0.03)
+    Z = int(bearing.n_balls)
+    ftf = {"outer": line.hz / Z, "inner": fr - line.hz / Z}.get(location, o.ftf * fr)
+    bsf = 0.5 * line.hz if location == "ball" else 0.5 * o.two_bsf * fr
+    return line, surface_speed(bearing, fr, location, ftf, bsf)
 
 
 def bank_features(path, bearing=None) -> dict:
@@ -114,11 +126,17 @@ def bank_features(path, bearing=None) -> dict:
         fs = float(h.attrs.get("sample_rate_Hz", BANK_FS))
     ok = lab["result"] == 0
     X, lab = X[ok], lab[ok]
-    cls, fr, period, v = _item_kinematics(bearing, lab)
-    wf = window_features(X, fs, fr, fault_orders(bearing))
-    pf = pass_features(X, fs, period, v)
+    cls = np.asarray(lab["fault_class"], int)
+    nominal = float(bank_spec(10).data["operation"]["speed_rpm"]) / 60.0
+    o = fault_orders(bearing)
+    fr = np.array([measured_shaft_speed(x, fs, nominal) for x in X])
+    wf = window_features(X, fs, fr, o)
+    pf = np.zeros((len(X), len(PASS_FEATURE_NAMES)))
+    for i in np.flatnonzero(cls > 0):
+        line, v = fault_kinematics(X[i], fs, bearing, fr[i], CLASSES[cls[i]], o)
+        pf[i] = pass_features(X[i][None], fs, 1.0 / line.hz, v)[0]
     out = {"wf": wf, "pf": pf, "cls": cls, "length_mm": np.asarray(lab["spall_length_mm"], float),
-           "split": np.asarray(lab["split"], int), "fr": fr,
+           "split": np.asarray(lab["split"], int), "fr": fr, "fr_true": np.asarray(lab["shaft_Hz"], float),
            "bpfo_Hz": np.asarray(lab["bpfo_Hz"], float), "bpfi_Hz": np.asarray(lab["bpfi_Hz"], float)}
     np.savez(cache, **out)
     return out
@@ -180,7 +198,7 @@ def train_identifier(feats: dict, bank="") -> Identifier:
 
     clf = RandomForestClassifier(n_estimators=300, random_state=0, n_jobs=1).fit(feats["wf"][tr], feats["cls"][tr])
     Xp = np.column_stack([feats["pf"], feats["cls"]])
-    y = np.log(feats["length_mm"])
+    y = np.log(np.where(fault, feats["length_mm"], 1.0))
     reg = GradientBoostingRegressor(n_estimators=300, max_depth=3, learning_rate=0.05, subsample=0.8,
                                     random_state=0).fit(Xp[tr & fault], y[tr & fault])
     r = np.abs(reg.predict(Xp[cal & fault]) - y[cal & fault])
@@ -208,8 +226,33 @@ def default_identifier(count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Ident
             raise InputError(f"BEARINGSIM_IDENTIFY_BANK={env}: no such bank file")
         if not p.exists():
             build_bank(p, count, seed, progress)
-        _DEFAULT[key] = train_identifier(bank_features(p), p)
+        _DEFAULT[key] = _cached_identifier(p)
     return _DEFAULT[key]
+
+
+def _cached_identifier(p: Path) -> Identifier:
+    """The identifier trained on bank ``p``, pickled beside it (keyed by the scikit-learn version
+    and the bank's time stamp; retrained when either changes)."""
+    import pickle
+
+    try:
+        import sklearn
+        ver = sklearn.__version__
+    except ImportError:
+        ver = "none"
+    pk = p.with_suffix(f".identifier-{ver}.pkl")
+    if pk.exists() and pk.stat().st_mtime >= p.stat().st_mtime:
+        try:
+            with open(pk, "rb") as fh:
+                return pickle.load(fh)
+        except Exception:           # a stale or partial pickle: retrain
+            pass
+    ident = train_identifier(bank_features(p), p)
+    tmp = pk.with_suffix(".tmp")
+    with open(tmp, "wb") as fh:
+        pickle.dump(ident, fh)
+    os.replace(tmp, pk)
+    return ident
 
 
 # ----------------------------------------------------------------------------------- identify
@@ -267,7 +310,6 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     the case's speed).  ``identifier``: a trained :class:`Identifier` (default: the cached bank's).
     ``min_seconds``: the shortest record accepted (the benchmark's round trip passes the bank's
     own 0.2 s; a record file must hold :data:`bearingsim.records.MIN_SECONDS`)."""
-    from .background_fit import shaft_speed
     from .case import load_case
 
     case = load_case(case) if isinstance(case, (str, Path)) else case
@@ -294,7 +336,7 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
         msgs.append(f"the record is clipped ({100 * clip:.3f} % of samples on its rails): the class is "
                     "given, the size is not identifiable (the impulses are cut)")
     x = x - x.mean()
-    fr = shaft_speed(x, fs, nominal / 60.0)
+    fr = measured_shaft_speed(x, fs, nominal / 60.0)
     y = _resample(x, fs)
     W = cut_windows(y, BANK_FS, BANK_WINDOW_S)
     o = fault_orders(b)
@@ -315,8 +357,7 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     if proba[c] < MIN_PROBABILITY:
         msgs.append(f"the class is uncertain (p = {proba[c]:.2f} < {MIN_PROBABILITY}): size not identifiable")
     # the fault line: its frequency gives the contact angle
-    f_nom = {"outer": o.bpfo, "inner": o.bpfi, "ball": o.two_bsf}[cls] * fr
-    line = line_frequency(x, fs, f_nom, octave_bands(fs), rel=0.03)
+    line, v = fault_kinematics(x, fs, b, fr, cls, o)
     res.line_hz, res.line_db = line.hz, line.db
     res.order = line.hz / fr
     if line.db < 6.0:
@@ -355,14 +396,6 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     if ident.regressor is None:
         msgs.append("size: not identifiable without scikit-learn (pip install 'bearingsim[ml]')")
         return res
-    ftf, bsf = o.ftf * fr, 0.5 * o.two_bsf * fr
-    if cls == "outer":
-        ftf = line.hz / int(b.n_balls)
-    elif cls == "inner":
-        ftf = fr - line.hz / int(b.n_balls)
-    else:
-        bsf = 0.5 * line.hz
-    v = surface_speed(b, fr, cls, ftf, bsf)
     period = 1.0 / line.hz
     pf = pass_features(W, BANK_FS, period, v)
     res.resolvable_mm = float(v / (0.45 * BANK_FS) * 1e3)
@@ -428,34 +461,48 @@ def identification_text(r: Identification) -> str:
 
 # ----------------------------------------------------------------------------------- the twin
 
-def twin_case(case, r: Identification, template="dataset_cwru_4class"):
-    """A case of the record's bearing at the estimate: speed, defect location and length (the
-    template's [dynamics] and depth)."""
-    from .case import load_case
+def twin_spec(r: Identification, count=16, seed=8001):
+    """The bank's spec narrowed to the estimate: every item at the identified speed, class and
+    length (the transfer path, background, fault level and loads drawn as in the bank): the
+    twin is ``count`` machines like the bank's with this fault.  Same shapes as the bank's chunks,
+    so the compiled program is the bank's (the JAX compilation cache)."""
+    import copy
 
-    base = load_case(template)
-    c = base.with_value("operation.speed_rpm", r.rpm)
+    from .case import case_from_dict
+
+    raw = copy.deepcopy(bank_spec(count, seed).raw)
+    ds = raw["dataset"]
+    ds["speed_rpm"] = [float(r.rpm), float(r.rpm)]
+    for k in CLASSES:
+        ds[f"{k}_fraction"] = 1.0 if k == r.fault_class else 0.0
     if r.fault_class != "healthy":
-        L = r.length_mm if r.length_mm is not None else float(np.sqrt(np.prod(r.length_interval_mm))) \
-            if r.length_interval_mm else 0.5334
-        c = c.with_value("defect.location", r.fault_class).with_value("defect.length_mm", L)
-        if r.fault_class == "ball":
-            c = c.with_value("defect.depth_mm", 0.05)
-    return c
+        L = r.length_mm if r.length_mm is not None else (float(np.sqrt(np.prod(r.length_interval_mm)))
+                                                          if r.length_interval_mm else 0.5334)
+        key = {"outer": "spall_length_mm", "inner": "inner_length_mm", "ball": "ball_length_mm"}[r.fault_class]
+        ds[key] = [float(L), float(L)]
+    return case_from_dict(raw, "identify twin")
 
 
-def twin_record(case, r: Identification, duration=0.5):
-    """(record m/s^2, fs) of the simulated twin at the estimate (12 kHz)."""
-    from .realism import simulate_record
+def twin_record(case, r: Identification, count=16, progress=False):
+    """(records (count, T) in m/s^2, fs) of the simulated twin at the estimate (:func:`twin_spec`,
+    0.2 s each at 12 kHz)."""
+    import tempfile
 
-    c = twin_case(case, r)
-    y, fs, _, _ = simulate_record(c, duration=duration, sample_rate=BANK_FS)
-    return np.asarray(y), fs
+    import h5py
+
+    from .dataset import make_dataset
+
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "twin.h5"
+        make_dataset(twin_spec(r, count), p, progress=progress)
+        with h5py.File(p, "r") as h:
+            return h["signals"][:].astype(float), BANK_FS
 
 
 def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""):
-    """The record's squared-envelope spectrum with the twin's overlaid (each scaled to its own
-    peak) and four passes in time; returns the figure (saved to ``path`` when given)."""
+    """The record's squared-envelope spectrum with the twins' (their mean, mirrored; each scaled to
+    its own peak) and four passes in time of the record and the first twin; returns the figure
+    (saved to ``path`` when given).  ``twin``: (records (N, T) or (T,), fs)."""
     import matplotlib.pyplot as plt
 
     from .signal import envelope_spectrum
@@ -463,12 +510,18 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 7))
     band = (2000.0, min(5500.0, 0.45 * fs))
     es = envelope_spectrum(np.asarray(x, float), fs, band=band)
-    m = es.freq <= 600
-    a1.plot(es.freq[m], es.amplitude[m] / es.amplitude[m][1:].max(), lw=0.8, label="measured")
+    m = es.freqs <= 600
+    a1.plot(es.freqs[m], es.amplitude[m] / es.amplitude[m][1:].max(), lw=0.8, label="measured")
     if twin is not None:
-        et = envelope_spectrum(twin[0], twin[1], band=(band[0], min(band[1], 0.45 * twin[1])))
-        mt = et.freq <= 600
-        a1.plot(et.freq[mt], -et.amplitude[mt] / et.amplitude[mt][1:].max(), lw=0.8, label="simulated twin (mirrored)")
+        acc = None
+        for y in np.atleast_2d(twin[0]):
+            et = envelope_spectrum(y, twin[1], band=(band[0], min(band[1], 0.45 * twin[1])))
+            a = np.interp(es.freqs[m], et.freqs, et.amplitude)
+            a = a / max(a[1:].max(), 1e-300)
+            acc = a if acc is None else acc + a
+        acc = acc / len(np.atleast_2d(twin[0]))
+        a1.plot(es.freqs[m], -acc / max(acc[1:].max(), 1e-300), lw=0.8,
+                label=f"simulated twin, mean of {len(np.atleast_2d(twin[0]))} (mirrored)")
     if r.line_hz:
         for k in (1, 2, 3):
             a1.axvline(k * r.line_hz, color="r", ls=":", lw=0.8)
@@ -484,7 +537,7 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
     if twin is not None:
         nt = int(min(4 * P, 0.2) * twin[1])
         tt = np.arange(nt) / twin[1] * 1e3
-        ys = twin[0][:nt]
+        ys = np.atleast_2d(twin[0])[0][:nt]
         a2.plot(tt, ys / np.max(np.abs(ys)) - 2.2, lw=0.7, label="twin (offset)")
     a2.set_xlabel("time (ms)")
     a2.set_ylabel("acceleration (normalised)")
