@@ -39,7 +39,7 @@ from .records import MIN_SECONDS, check_record, read_record
 __all__ = ["BANK_FS", "BANK_WINDOW_S", "BANK_SEED", "BANK_COUNT", "SLIP_MAX", "LEVEL", "CLASSES",
            "Identification", "Identifier", "bank_spec", "build_bank", "bank_features", "train_identifier",
            "default_identifier", "identify", "identify_file", "clipped_fraction", "identification_to_dict",
-           "identification_text", "twin_spec", "twin_record", "plot_identification",
+           "identification_text", "twin_spec", "twin_record", "bank_twins", "plot_identification",
            "measured_shaft_speed", "fault_kinematics", "cache_dir"]
 
 #: the bank's sample rate (Hz) and window (s): records are resampled to it and cut into windows of it
@@ -497,6 +497,25 @@ def twin_record(case, r: Identification, count=16, progress=False):
         make_dataset(twin_spec(r, count), p, progress=progress)
         with h5py.File(p, "r") as h:
             return h["signals"][:].astype(float), BANK_FS
+
+
+def bank_twins(identifier: Identifier, r: Identification, k=8):
+    """(records (k, T), fs) of the ``k`` bank records nearest the estimate (its class; nearest in
+    log length and speed): simulations by the engine near the estimate, at no new cost (the
+    notebook's twin; ``twin_record`` simulates the estimate itself)."""
+    import h5py
+
+    with h5py.File(identifier.bank, "r") as h:
+        lab = h["labels"][:]
+        c = CLASSES.index(r.fault_class)
+        idx = np.flatnonzero((lab["fault_class"] == c) & (lab["result"] == 0))
+        if c and r.length_interval_mm:
+            L = r.length_mm or float(np.sqrt(np.prod(r.length_interval_mm)))
+            d = np.abs(np.log(lab["spall_length_mm"][idx] / L)) + np.abs(lab["speed_rpm"][idx] / r.rpm - 1.0) * 10
+        else:
+            d = np.abs(lab["speed_rpm"][idx] / r.rpm - 1.0)
+        pick = np.sort(idx[np.argsort(d)[:k]])
+        return h["signals"][pick].astype(float), float(h.attrs.get("sample_rate_Hz", BANK_FS))
 
 
 def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""):
