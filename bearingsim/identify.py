@@ -10,7 +10,8 @@ once with :func:`bearingsim.dataset.make_dataset` and cached; its windows give
   (probability = the forest's class probability averaged over the record's 0.2 s windows); without
   scikit-learn, the family-contrast rule (the strongest fault family 6 dB over the others);
 * the length: a gradient-boosted regression of log(length) on the pass features of
-  :mod:`bearingsim.fault_size` (entry/exit event spacing on a length grid through the kinematics),
+  :mod:`bearingsim.fault_size` (entry/exit event spacing on a length grid through the kinematics)
+  and the envelope features,
   with a split-conformal 90 % interval (the residual quantile on bank items the regressor never
   saw).
 
@@ -182,22 +183,32 @@ class Identifier:
         p[:, self.classifier.classes_] = self.classifier.predict_proba(wf)
         return p
 
-    def log_length(self, pf, cls):
-        return self.regressor.predict(np.column_stack([pf, np.full(len(pf), cls)]))
+    def log_length(self, pf, cls, wf):
+        """log(length / mm) per window from its pass features, the class and its envelope features."""
+        return self.regressor.predict(np.column_stack([pf, np.full(len(pf), cls), wf]))
 
 
-def train_identifier(feats: dict, bank="") -> Identifier:
-    """Train on the bank's 'train' split; the conformal quantile on the rest (never trained on)."""
+def prior_range_mm(spec=None) -> tuple:
+    """The bank spec's range of defect lengths (mm) over its fault classes: the prior, outside of
+    which a length is not identifiable."""
+    ds = (spec if spec is not None else bank_spec(10)).data["dataset"]
+    keys = ("spall_length_mm", "inner_length_mm", "ball_length_mm")
+    return (float(min(ds[k][0] for k in keys if k in ds)), float(max(ds[k][1] for k in keys if k in ds)))
+
+
+def train_identifier(feats: dict, bank="", prior_mm=None) -> Identifier:
+    """Train on the bank's 'train' split; the conformal quantile on the rest (never trained on).
+    ``prior_mm``: the length range of the bank's spec (default :func:`prior_range_mm`)."""
     tr = feats["split"] == 0
     cal = ~tr
     fault = feats["cls"] > 0
-    prior = (float(feats["length_mm"][fault].min()), float(feats["length_mm"][fault].max()))
+    prior = prior_range_mm() if prior_mm is None else tuple(prior_mm)
     if not _sklearn():
         return Identifier(None, None, float("nan"), prior, str(bank), {"note": "scikit-learn not installed"})
     from sklearn.ensemble import GradientBoostingRegressor, RandomForestClassifier
 
     clf = RandomForestClassifier(n_estimators=300, random_state=0, n_jobs=1).fit(feats["wf"][tr], feats["cls"][tr])
-    Xp = np.column_stack([feats["pf"], feats["cls"]])
+    Xp = np.column_stack([feats["pf"], feats["cls"], feats["wf"]])
     y = np.log(np.where(fault, feats["length_mm"], 1.0))
     reg = GradientBoostingRegressor(n_estimators=300, max_depth=3, learning_rate=0.05, subsample=0.8,
                                     random_state=0).fit(Xp[tr & fault], y[tr & fault])
@@ -399,7 +410,7 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     period = 1.0 / line.hz
     pf = pass_features(W, BANK_FS, period, v)
     res.resolvable_mm = float(v / (0.45 * BANK_FS) * 1e3)
-    logL = float(np.median(ident.log_length(pf, c)))
+    logL = float(np.median(ident.log_length(pf, c, wf)))
     lo, hi = math.exp(logL - ident.q_log), math.exp(logL + ident.q_log)
     res.length_mm = math.exp(logL)
     res.length_interval_mm = (max(lo, ident.prior_mm[0]) if hi > ident.prior_mm[0] else lo,
