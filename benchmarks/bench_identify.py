@@ -145,7 +145,8 @@ def main(argv=None):
         r = e["r"]
         nom = e["size_in"] * IN
         iv = r.length_interval_mm
-        inside = "-" if not (iv and math.isfinite(nom)) else ("yes" if iv[0] <= nom <= iv[1] else "no")
+        inside = "-" if not (iv and math.isfinite(nom)) else (
+            "yes" if iv[0] - 1e-9 <= nom <= iv[1] + 1e-9 else "no")     # 0.007 in = the prior's lower end
         ls = f"{r.length_mm:.3f}" if r.length_mm is not None else "n/i"
         ivs = f"{iv[0]:.2f}-{iv[1]:.2f}" if iv else "-"
         an = f"{r.contact_angle_deg:.1f}" if r.contact_angle_deg is not None else "-"
