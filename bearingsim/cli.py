@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|cache|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|identify|cache|demo``.
 
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.workflows`,
 files are written by :mod:`bearingsim.io`, figures drawn by :mod:`bearingsim.plots`.  Exit codes
@@ -404,6 +404,29 @@ def cmd_calibrate(args):
     return 0
 
 
+def cmd_identify(args):
+    from . import identify as ident
+
+    case = load_case(args.case)
+    budget.check_output(args.plot, "--plot")
+    budget.check_output(args.json, "--json")
+    r, x, fs = ident.identify_file(args.record, case, channel=args.channel, rpm=args.rpm,
+                                   sample_rate=args.sample_rate_Hz)
+    print(ident.identification_text(r))
+    if args.json:
+        io.write_json(args.json, ident.identification_to_dict(r))
+        _wrote(args.json)
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        print("simulating the twin at the estimate (compiles once) ...", flush=True)
+        twin = ident.twin_record(case, r)
+        ident.plot_identification(x, fs, r, twin, path=args.plot, title=f"{Path(args.record).name}: {r.fault_class}")
+        _wrote(args.plot)
+    return 0
+
+
 def cmd_compare(args):
     case = load_case(args.case)
     budget.check_case(case, "compare")
@@ -506,6 +529,17 @@ def build_parser():
     s.add_argument("--unit", choices=("g", "m/s^2"), help="unit of the samples when the file does not say")
     s.add_argument("--count", type=int, metavar="N", help="items of the data set (default: the template's)")
     s.add_argument("--duration-s", type=float, metavar="S", help="seconds per item (default: the template's)")
+    s = _command(sub, "identify", cmd_identify, "identify a fault from a measured record: class and "
+                 "location with a probability, defect length, contact angle and shaft speed with intervals",
+                 positional=("record", "RECORD", "record: .npz (channel, fs, rpm), .npy, .csv or .txt (one column)"),
+                 plot=("OUT.png", "the record against a simulated twin at the estimate"))
+    s.add_argument("--case", required=True, metavar="CASE", help="the bearing's case (its geometry; the "
+                   "operating point is estimated), e.g. dataset_cwru_4class")
+    s.add_argument("--rpm", type=float, metavar="N", help="nominal shaft speed (searched +-10 %%; default "
+                   "the .npz rpm or the case's speed)")
+    s.add_argument("--channel", help="the .npz key of the signal (default DE, or the file's only array)")
+    s.add_argument("--sample-rate-Hz", type=float, metavar="FS", help="sample rate when the file does not say")
+    s.add_argument("--json", metavar="OUT.json", help="write the identification as JSON")
     _command(sub, "compare", cmd_compare, "quasi-static vs dynamic: the ball loads of the quasi-static "
              "sweep (Jones model, no inertia) against the dynamic simulation's as the balls pass the spall, "
              "and the dynamic amplification",

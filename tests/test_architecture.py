@@ -12,11 +12,11 @@ PACKAGE = ROOT / "bearingsim"
 #: the edge: reads and writes files, converts units, draws, reports; everything else is the core
 EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "report", "realism",
         "calibration", "transfer", "machine", "records", "distributed", "budget", "sets", "mldata",
-        "record_spectrum"}
+        "record_spectrum", "identify"}
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
         "pit", "passes", "features", "background", "life", "limits", "background_fit", "shaft",
-        "signal_stage", "nuisance"}
+        "signal_stage", "nuisance", "fault_size"}
 INFRASTRUCTURE = {"__init__", "_version", "runtime"}
 
 
