@@ -205,15 +205,16 @@ def cmd_dataset(args):
     est = budget.check_case(case, "dataset", args.output)
     if est is not None:
         print(est.text(args.workers or 1), flush=True)
+    kw = dict(throw=False, progress=True, device=args.device, chunk=args.chunk, compression=args.compression)
     if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
-        s = workflows.dataset_case(case, args.output, throw=False, progress=True)
+        s = workflows.dataset_case(case, args.output, **kw)
     else:
         from .distributed import DaskRunner
 
         with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
-            s = workflows.dataset_case(case, args.output, throw=False, progress=True, runner=runner)
+            s = workflows.dataset_case(case, args.output, runner=runner, **kw)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
-          f"({s.seconds_per_item:.3f} s per item, compilation included)")
+          f"({s.seconds_per_item:.3f} s per item, compilation included) on {s.device}, {s.chunk} items per chunk")
     if s.failed:
         detail = ", ".join(f"{n} {DatasetResult(c).message}" for c, n in sorted(s.failures.items()))
         print(f"bearingsim: warning: {s.failed} of {s.count} items failed ({detail}); their "
@@ -285,6 +286,18 @@ def _command(sub, name, func, help, positional=_CASE, output=False, plot=None):
     return s
 
 
+def _chunk_arg(v):
+    if v == "auto":
+        return 0
+    try:
+        n = int(v)
+    except ValueError:
+        n = -1
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"--chunk must be a whole number >= 0 or auto, got {v!r}")
+    return n
+
+
 def _cluster_flags(s, what):
     where = s.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, metavar="N", help=f"run {what} on a local Dask cluster "
@@ -316,6 +329,14 @@ def build_parser():
              positional=("spec", "SPEC.toml", "case file with a [dataset] section, or a shipped case name"),
              output=True)
     _cluster_flags(s, "the chunks")
+    s.add_argument("--device", choices=("cpu", "gpu"), help="run the chunks on this JAX device (default: "
+                   "JAX's choice, the GPU where JAX sees one; the run says which)")
+    s.add_argument("--chunk", type=_chunk_arg, metavar="N|auto", help="items per chunk (default: the "
+                   "spec's [dataset] chunk; auto or 0: what fills the device: 16 per CPU core, or as many "
+                   "as fit in a quarter of the GPU's memory); the file does not depend on it")
+    s.add_argument("--compression", choices=("lzf", "gzip", "gzip1", "none"), default=None,
+                   help="codec of /signals: lzf (default: fast), gzip (level 4: archive, a few per cent "
+                   "smaller, slow to write), gzip1, none (fastest)")
     s = _command(sub, "calibrate", cmd_calibrate, "fit a data set spec to your machine: background, "
                  "resonances and levels from a healthy record (and at most one fault record)",
                  positional=("healthy", "HEALTHY", "healthy record: .npz (channel, fs, rpm, units), .npy, "

@@ -96,7 +96,7 @@ def test_interrupted_distributed_run_resumes_in_process(serial, runner, tmp_path
     out = tmp_path / "i.h5"
     with pytest.raises(Interrupted, match="3 of 6 items finished"):
         make_dataset(spec(), out, progress=False, runner=_Via(runner, lambda fn: fn, stop_after=1))
-    assert not out.exists() and len(list(partial_path(out).glob("chunk_*.npz"))) == 1
+    assert not out.exists() and len(list(partial_path(out).glob("chunk_*"))) == 1
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
     make_dataset(spec(), out, progress=False)                # no cluster: continues from the chunk
     assert not partial_path(out).exists()

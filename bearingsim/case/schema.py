@@ -462,9 +462,11 @@ SCHEMA: dict[str, Section] = {
         "keys (sample rate, structure, tolerances, noise) apply to every item.",
         {
             "count": _int("number of items N", ge=1),
-            "seed": _int("seed of the label draw (numpy default_rng) and of the noise", 0, ge=0),
+            "seed": _int("seed of the items' keys (jax.random.fold_in(PRNGKey(seed), index)): every draw of an item", 0, ge=0),
             "duration_s": _num("simulated time per item", "s", 0.1, gt=0),
-            "chunk": _int("items simulated together (vmap); memory and speed trade-off", 16, ge=1),
+            "chunk": _int("items simulated together (vmap); memory and speed trade-off; 0: what fills "
+                          "the device (16 per CPU core; on a GPU as many as fit in a quarter of its "
+                          "memory); the file does not depend on it", 16, ge=0),
             "healthy_fraction": _num("fraction of healthy items (spall depth and length 0)", "",
                                      0.2, ge=0, le=1),
             "depth_rule": _enum("how an item's drawn depth enters the contact: machined (the depth "
