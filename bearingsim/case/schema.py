@@ -10,6 +10,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
+from ..defect import LOCATIONS
 from .messages import fmt_num, suggest
 from .units import label
 
@@ -290,7 +291,7 @@ SCHEMA: dict[str, Section] = {
         "(default), a spall on the inner raceway, or a pit on one ball.  Absent: healthy bearing.",
         {
             "location": _enum("where the defect is: outer raceway, inner raceway (turns with the inner "
-                              "ring), or a pit on one ball", ("outer", "inner", "ball"), "outer"),
+                              "ring), or a pit on one ball", LOCATIONS, "outer"),
             "center_deg": _num("azimuth of the spall centre (outer or inner raceway; for the inner "
                                "raceway at the instant t = 0 of the solve, psi_di = center + omega t); "
                                "not used for a ball pit", "deg", 0.0),

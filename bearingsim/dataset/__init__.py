@@ -10,7 +10,7 @@ The package's files show the flow:
 ``program``  the device program: :func:`simulate_chunk` (plan, k) pads the chunk and makes one
              call, :func:`device_program` (the dynamics batch, then the signal stage);
 ``writer``   the resumable chunk files (a folder of raw .npy arrays per chunk, renamed
-             atomically) and the HDF5 layout (``/signals`` lzf by default: ``compression=``);
+             atomically) and the HDF5 layout (``/signals`` uncompressed by default: ``compression=``);
 ``runner``   the chunk plan (built physics objects, not the case), the device (``device=``), the
              chunk size, the in-process loop or a Dask cluster, interrupts, :func:`make_dataset`.
 
@@ -24,7 +24,7 @@ any chunk size and any number of Dask workers (on the same device type).  Memory
 by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` (exit code 130) with a one-line
 message; nothing temporary is left behind.
 
-``/signals``  float32 (N, T) sensor acceleration, m/s^2 (chunks (1, T), lzf unless told)
+``/signals``  float32 (N, T) sensor acceleration, m/s^2 (chunks (1, T), uncompressed unless told)
 ``/time``     float64 (T,) s
 ``/transfer_path`` float64 (N, M, 3) every item's sensor modes
 ``/labels``   compound (N,): the fields of :data:`LABEL_FIELDS` (docs/results.md); ``key`` is the

@@ -158,7 +158,7 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     :func:`serial_imap` (which runs when ``runner`` is None): :class:`bearingsim.distributed.DaskRunner`
     runs the chunks on a Dask cluster; the file is the same.  ``device``: "cpu" | "gpu" | None
     (:func:`resolve_device`); ``chunk``: items per chunk (None: the spec's ``chunk``; 0 or "auto":
-    :func:`default_chunk`); ``compression`` of /signals: "lzf" (default), "gzip", "gzip1", "none"
+    :func:`default_chunk`); ``compression`` of /signals: "none" (default), "gzip", "zstd", "lzf", "gzip1"
     (:mod:`bearingsim.dataset.writer`).  Returns a :class:`DatasetSummary` (``failed``: items with
     result != 0; ``seconds``: wall time of this run's simulations, compilation included;
     ``device``, ``chunk``)."""
