@@ -19,8 +19,9 @@ Resumable and interruptible.  Each finished chunk is saved at once (atomically) 
 every finished chunk, and running the same command again continues from them (a spec that
 differs from the one the folder was started with is refused).  When every chunk is there the
 HDF5 file is assembled from the folder in item order (atomically; the folder is then removed),
-so the same spec and seed give a bit-identical file however often the run was interrupted, for
-any chunk size and any number of Dask workers (on the same device type).  Memory stays bounded
+so the same spec, seed and chunk size give a bit-identical file however often the run was
+interrupted and on any number of Dask workers (on the same device type); another chunk size
+gives the same labels and the signals but for their last bits (docs/scale.md).  Memory stays bounded
 by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` (exit code 130) with a one-line
 message; nothing temporary is left behind.
 
