@@ -40,16 +40,22 @@ def chunked(tmp_path_factory):
 
 
 def same_but_the_last_bits(a, b):
-    """Labels and transfer paths bitwise equal; every signal equal to 1e-9 of its own peak (the
-    dynamics batch's XLA kernels round the last float64 bits by batch width: ~1e-15 relative in
-    the ring displacement, ~1e-11 of a healthy item's small acceleration, below float32 for a
-    faulty one)."""
+    """Labels and transfer paths bitwise equal, but for the two set from the signal's level
+    (``signal_gain`` and ``snr_dB`` with a target SNR: 1e-8 relative); every signal equal to 1e-7
+    of its own peak (the dynamics batch's XLA kernels round the last float64 bits by batch width:
+    ~1e-15 relative in the ring displacement, ~1e-11 of a healthy item's small acceleration,
+    below float32 for a faulty one; 2e-8 measured with the four-class spec's SNR scaling)."""
     with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        assert fa["labels"][()].tobytes() == fb["labels"][()].tobytes()
+        la, lb = fa["labels"][()], fb["labels"][()]
         assert fa["transfer_path"][()].tobytes() == fb["transfer_path"][()].tobytes()
         x, y = fa["signals"][()].astype(float), fb["signals"][()].astype(float)
+    for f in la.dtype.names:
+        if f in ("signal_gain", "snr_dB"):
+            np.testing.assert_allclose(la[f], lb[f], rtol=1e-8, atol=1e-12)
+        else:
+            assert la[f].tobytes() == lb[f].tobytes(), f
     peak = np.abs(x).max(axis=1, keepdims=True)
-    assert np.all(np.abs(x - y) <= 1e-9 * peak)
+    assert np.all(np.abs(x - y) <= 1e-7 * peak)
     return x.tobytes() == y.tobytes()
 
 

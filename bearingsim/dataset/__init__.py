@@ -21,7 +21,7 @@ differs from the one the folder was started with is refused).  When every chunk 
 HDF5 file is assembled from the folder in item order (atomically; the folder is then removed),
 so the same spec, seed and chunk size give a bit-identical file however often the run was
 interrupted and on any number of Dask workers (on the same device type); another chunk size
-gives the same labels and the signals but for their last bits (docs/scale.md).  Memory stays bounded
+gives the same drawn labels and the signals but for their last bits (docs/scale.md).  Memory stays bounded
 by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` (exit code 130) with a one-line
 message; nothing temporary is left behind.
 

@@ -6,8 +6,9 @@ sees one) unless named; the summary says which device ran.  Chunk size: the spec
 ``[dataset] chunk``, or with ``chunk = 0`` (or ``chunk="auto"``) what fills the device
 (:func:`default_chunk`): on a CPU 16 items per core; on a GPU as many items as fit in a quarter
 of its memory at :data:`BYTES_PER_SAMPLE` bytes per item and sample, at most
-:data:`MAX_GPU_CHUNK`.  The chunk size changes no label, and the signals only in their last
-bits (the dynamics batch rounds by batch width; docs/scale.md).
+:data:`MAX_GPU_CHUNK`.  The chunk size changes no drawn label, and the signals (with the gain
+a target SNR sets from them) only in their last bits (the dynamics batch rounds by batch width;
+docs/scale.md).
 """
 from __future__ import annotations
 
