@@ -127,7 +127,7 @@ def dataset_estimate(case) -> Estimate:
     fs = float(case.dynamics_settings()["sample_rate"])
     n = int(ds["count"])
     T = float(ds["duration_s"]) * fs
-    chunk = min(int(ds["chunk"]), n)
+    chunk = min(int(ds["chunk"]) or 16 * (os.cpu_count() or 1), n)   # 0: the CPU rule of dataset.default_chunk
     labels = n * 400.0                                  # label table, order, seeds, pit depths
     memory = BASE_BYTES + chunk * T * SAMPLE_BYTES + labels
     disk = 2 * 4.0 * n * T + labels

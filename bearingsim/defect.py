@@ -32,8 +32,9 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from .names import LOCATIONS
+
 PROFILES = ("rectangular", "ball-path")
-LOCATIONS = ("outer", "inner", "ball")
 
 __all__ = ["PROFILES", "LOCATIONS", "Spall", "NO_SPALL", "as_defects", "canonical_defects", "wrap_angle",
            "surface_radius", "depth_profile", "contact_depths", "ball_pit_depths", "advance"]

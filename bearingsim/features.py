@@ -39,6 +39,8 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
+from .defect import LOCATIONS
+
 __all__ = ["FaultOrders", "fault_orders", "FEATURE_NAMES", "window_features", "cut_windows", "octave_bands"]
 
 
@@ -156,7 +158,7 @@ def window_features(windows, fs, shaft_hz, orders: FaultOrders) -> np.ndarray:
     fam = {"outer": (col["O1"] + col["O2"] + col["O3"]) / 3.0,
            "inner": (col["I1"] + col["I2"] + col["I3"] + col["Isb"]) / 4.0,
            "ball": (col["B1"] + col["B2"] + col["Bsb"] + col["Ccomb"]) / 4.0}
-    names = ("outer", "inner", "ball")
+    names = LOCATIONS
     contrast = [fam[a] - np.maximum(*(fam[b] for b in names if b != a)) for a in names]
     m2 = rms * rms
     kurt = np.mean(X ** 4, axis=1) / np.where(m2 > 0, m2 * m2, 1.0)

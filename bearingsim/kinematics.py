@@ -106,15 +106,30 @@ def ball_kinematics(bearing, op: Operation, alpha_i, alpha_o) -> BallKinematics:
 
 
 class DefectFrequencies(NamedTuple):
-    """Characteristic defect frequencies (Hz), outer ring fixed.  ``bsf`` is once per ball
-    revolution; ``two_bsf`` = 2 BSF is what some tables (CWRU) list as "rolling element"."""
+    """Characteristic defect frequencies (Hz), outer ring fixed: the one frequency type of every
+    result that reports them.  ``bsf`` is once per ball revolution; ``two_bsf`` = 2 BSF is what
+    some tables (CWRU) list as "rolling element".  Scalars, or arrays with a leading item axis.
+    :meth:`hz` / :meth:`from_hz`: the ``shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz`` fields of
+    the results files and data set labels."""
 
     shaft: jnp.ndarray
     ftf: jnp.ndarray
     bpfo: jnp.ndarray
     bpfi: jnp.ndarray
     bsf: jnp.ndarray
-    two_bsf: jnp.ndarray
+
+    @property
+    def two_bsf(self):
+        return 2.0 * self.bsf
+
+    def hz(self) -> dict:
+        """``{"shaft_Hz": ..., "ftf_Hz": ..., "bpfo_Hz": ..., "bpfi_Hz": ..., "bsf_Hz": ...}``."""
+        return {f"{k}_Hz": v for k, v in self._asdict().items()}
+
+    @classmethod
+    def from_hz(cls, d) -> "DefectFrequencies":
+        """From a mapping with the ``*_Hz`` keys of :meth:`hz`."""
+        return cls(*(d[f"{k}_Hz"] for k in cls._fields))
 
 
 def defect_frequencies(bearing, shaft_hz, alpha=None) -> DefectFrequencies:
@@ -125,4 +140,4 @@ def defect_frequencies(bearing, shaft_hz, alpha=None) -> DefectFrequencies:
     Z = bearing.n_balls
     ftf = 0.5 * f * (1.0 - gc)
     bsf = f * (1.0 - gc ** 2) / (2.0 * bearing.g)
-    return DefectFrequencies(f, ftf, Z * ftf, 0.5 * Z * f * (1.0 + gc), bsf, 2.0 * bsf)
+    return DefectFrequencies(f, ftf, Z * ftf, 0.5 * Z * f * (1.0 + gc), bsf)

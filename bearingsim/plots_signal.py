@@ -14,6 +14,7 @@ import matplotlib.transforms as mtransforms
 import numpy as np
 
 from .case.units import from_si
+from .defect import LOCATIONS
 from .signal import EnvelopeSpectrum, Spectrum, defect_markers
 
 __all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer", "plot_record_spectrum"]
@@ -182,7 +183,7 @@ def plot_transfer(reports, path=None):
         cm = np.asarray(r.confusion, float)
         frac = cm / np.maximum(cm.sum(1, keepdims=True), 1.0)
         ax.imshow(frac, vmin=0.0, vmax=1.0, cmap="Blues")
-        names = ("healthy", "outer", "inner", "ball")
+        names = ("healthy",) + LOCATIONS
         ax.set_xticks(range(4), names)
         ax.set_yticks(range(4), names)
         ax.set_xlabel("predicted class")

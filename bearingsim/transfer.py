@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .defect import LOCATIONS
 from .errors import InputError
 from .features import FEATURE_NAMES, FaultOrders, cut_windows, window_features
 
@@ -35,7 +36,7 @@ __all__ = ["CLASSES", "REAL_RECORDS", "DEV_RECORDS", "DEV_GRADES", "CLASSIFIERS"
            "make_classifier", "evaluate", "transfer_benchmark", "transfer_text", "require_sklearn"]
 
 #: class names (index = fault_class of the data sets)
-CLASSES = ("healthy", "outer", "inner", "ball")
+CLASSES = ("healthy",) + LOCATIONS
 
 #: the six 0 hp 12 kHz drive-end records of ../shared/realdata: file stem -> class
 REAL_RECORDS = {

@@ -381,14 +381,18 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     return Comparison(res, idx, qs, rows)
 
 
-def dataset_case(case, path, *, throw=True, progress=False, runner=None):
+def dataset_case(case, path, *, throw=True, progress=False, runner=None, device=None, chunk=None,
+                 compression=None):
     """Simulate the case's ``[dataset]`` into ``path`` (HDF5; ``dataset.make_dataset``).  Items
     that failed are in the file with a zero signal and a code; ``throw`` raises after writing.
     ``runner``: a :class:`bearingsim.distributed.DaskRunner` to run the chunks on a Dask cluster
-    (same file); None runs them in this process."""
+    (same file); None runs them in this process.  ``device`` ("cpu", "gpu", None: JAX's
+    default), ``chunk`` (items per chunk; 0: fill the device) and ``compression`` (of /signals)
+    as in ``make_dataset``."""
     from .dataset import make_dataset
 
-    summary = make_dataset(case, path, progress=progress, runner=runner)
+    summary = make_dataset(case, path, progress=progress, runner=runner, device=device, chunk=chunk,
+                           compression=compression)
     if throw and summary.failed:
         raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
                                 f"set failed (written to {path} with labels/result != 0)")

@@ -116,7 +116,7 @@ class Cheap:
         return self.r.imap(fn, shared, items)
 
 if __name__ == "__main__":
-    dsm._run_settings = lambda *a: (2, 1)
+    dsm.runner.run_settings = lambda *a: (2, 1)
     case = load_case("{SPEC}").with_value("dataset.count", {n})
     t0 = time.perf_counter()
     with DaskRunner(workers=2) as r:

@@ -16,7 +16,7 @@ EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "r
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
         "pit", "passes", "features", "background", "life", "limits", "background_fit", "shaft",
-        "signal_stage", "nuisance", "fault_size"}
+        "signal_stage", "nuisance", "fault_size", "names"}
 INFRASTRUCTURE = {"__init__", "_version", "runtime"}
 
 
@@ -147,3 +147,19 @@ def test_no_two_modules_import_each_other():
     g = module_graph()
     pairs = sorted({tuple(sorted((a, b))) for a, deps in g.items() for b in deps if a in g.get(b, set())})
     assert not pairs, "modules that import each other: " + ", ".join(f"{a} <-> {b}" for a, b in pairs)
+
+
+#: the data set package's files in the order of its flow: each imports only those before it
+DATASET_FLOW = ("spec", "program", "writer", "runner")
+
+
+def test_the_dataset_package_shows_the_flow():
+    """spec (labels) -> program (the device program) -> writer (chunk files, HDF5) -> runner
+    (plan, device, in-process / Dask, make_dataset): no file imports a later one."""
+    files = {p.stem for p in (PACKAGE / "dataset").glob("*.py")} - {"__init__"}
+    assert files == set(DATASET_FLOW)
+    for k, name in enumerate(DATASET_FLOW):
+        p = PACKAGE / "dataset" / f"{name}.py"
+        later = {f"bearingsim.dataset.{n}" for n in DATASET_FLOW[k + 1:]}
+        bad = [t for _, t, _ in imports(p, dotted(p)) if t in later]
+        assert not bad, f"dataset/{name}.py imports a later stage: {bad}"

@@ -92,11 +92,21 @@ def test_two_workers_same_bytes_with_a_worker_killed(serial, runner, tmp_path):
     _same(serial, out)
 
 
+def test_two_workers_and_another_chunk_size(serial, runner, tmp_path):
+    """2 workers at chunk 2 (3 chunks) give the labels of the in-process run at chunk 3 bit for
+    bit and its signals but for the last bits (test_dataset_engine.same_but_the_last_bits)."""
+    from test_dataset_engine import same_but_the_last_bits
+    out = tmp_path / "c2.h5"
+    s = make_dataset(spec(), out, progress=False, runner=runner, chunk=2)
+    assert s.chunk == 2 and s.failed == 0
+    same_but_the_last_bits(serial, out)
+
+
 def test_interrupted_distributed_run_resumes_in_process(serial, runner, tmp_path):
     out = tmp_path / "i.h5"
     with pytest.raises(Interrupted, match="3 of 6 items finished"):
         make_dataset(spec(), out, progress=False, runner=_Via(runner, lambda fn: fn, stop_after=1))
-    assert not out.exists() and len(list(partial_path(out).glob("chunk_*.npz"))) == 1
+    assert not out.exists() and len(list(partial_path(out).glob("chunk_*"))) == 1
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
     make_dataset(spec(), out, progress=False)                # no cluster: continues from the chunk
     assert not partial_path(out).exists()

@@ -19,8 +19,8 @@ def characteristic_frequencies(case, speed_rpm=None) -> dict:
 
     n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
     shaft = from_si(to_si(n, "rpm"), "rev_s")
-    f = defect_frequencies(case.bearing(), shaft)._asdict()
-    return {"shaft": shaft, **{label: float(f[k]) for k, label in _NAMES.items()}}
+    f = defect_frequencies(case.bearing(), shaft)
+    return {"shaft": shaft, **{label: float(getattr(f, k)) for k, label in _NAMES.items()}}
 
 
 def check_sampling(case, speed_rpm=None, speed_key="operation.speed_rpm"):

@@ -10,6 +10,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
+from ..defect import LOCATIONS
 from .messages import fmt_num, suggest
 from .units import label
 
@@ -290,7 +291,7 @@ SCHEMA: dict[str, Section] = {
         "(default), a spall on the inner raceway, or a pit on one ball.  Absent: healthy bearing.",
         {
             "location": _enum("where the defect is: outer raceway, inner raceway (turns with the inner "
-                              "ring), or a pit on one ball", ("outer", "inner", "ball"), "outer"),
+                              "ring), or a pit on one ball", LOCATIONS, "outer"),
             "center_deg": _num("azimuth of the spall centre (outer or inner raceway; for the inner "
                                "raceway at the instant t = 0 of the solve, psi_di = center + omega t); "
                                "not used for a ball pit", "deg", 0.0),
@@ -463,9 +464,11 @@ SCHEMA: dict[str, Section] = {
         "keys (sample rate, structure, tolerances, noise) apply to every item.",
         {
             "count": _int("number of items N", ge=1),
-            "seed": _int("seed of the label draw (numpy default_rng) and of the noise", 0, ge=0),
+            "seed": _int("seed of the items' keys (jax.random.fold_in(PRNGKey(seed), index)): every draw of an item", 0, ge=0),
             "duration_s": _num("simulated time per item", "s", 0.1, gt=0),
-            "chunk": _int("items simulated together (vmap); memory and speed trade-off", 16, ge=1),
+            "chunk": _int("items simulated together (vmap); memory and speed trade-off; 0: what fills "
+                          "the device (16 per CPU core; on a GPU as many as fit in a quarter of its "
+                          "memory); the file does not depend on it", 16, ge=0),
             "healthy_fraction": _num("fraction of healthy items (spall depth and length 0)", "",
                                      0.2, ge=0, le=1),
             "depth_rule": _enum("how an item's drawn depth enters the contact: machined (the depth "
