@@ -531,7 +531,9 @@ def _load_cause(bearing, op, F, st, code):
     side = jnp.any(F[jnp.asarray([0, 1, 3, 4])] != 0.0)
     k = jnp.argmax(st.Q_inner)
     flat = (st.Q_inner[k] > 0.0) & (st.alpha_inner[k] < GROOVE_BOTTOM_ANGLE)
-    unpropped = side & (F[2] >= 0.0) & ((F[2] == 0.0) | flat)
+    # F_z = 0 names the cause whatever the iteration did; the groove-bottom state only where it is
+    # the state the checks accepted (a failed iteration's last iterate says nothing)
+    unpropped = side & ((F[2] == 0.0) | ((F[2] > 0.0) & flat & (code == 0)))
     reverse = bearing.angular_contact & ((F[2] < 0.0) | unpropped)
     return jnp.where(no_load, RESULTS.no_load, jnp.where(reverse, RESULTS.low_shoulder, code))
 
