@@ -519,7 +519,7 @@ def shoulder_crossings(bearing, alpha_inner, alpha_outer, Q_inner, Q_outer):
 GROOVE_BOTTOM_ANGLE = np.radians(1.0)
 
 
-def _load_cause(bearing, op, F, st, code):
+def _load_cause(bearing, op, F, st, code, settled=True):
     """The cause that the loads name, whatever the Newton iteration did: no load at speed (9); on
     a single angular contact bearing a negative axial load, or none (or too little) under a radial
     load or a moment (7): each loaded contact's axial component pushes the inner ring against the
@@ -531,9 +531,10 @@ def _load_cause(bearing, op, F, st, code):
     side = jnp.any(F[jnp.asarray([0, 1, 3, 4])] != 0.0)
     k = jnp.argmax(st.Q_inner)
     flat = (st.Q_inner[k] > 0.0) & (st.alpha_inner[k] < GROOVE_BOTTOM_ANGLE)
-    # F_z = 0 names the cause whatever the iteration did; the groove-bottom state only where it is
-    # the state the checks accepted (a failed iteration's last iterate says nothing)
-    unpropped = side & ((F[2] == 0.0) | ((F[2] > 0.0) & flat & (code == 0)))
+    # F_z = 0 names the cause whatever the iteration did; the groove-bottom state only where the
+    # iteration converged on it (``settled``: a failed iteration's last iterate says nothing); it
+    # is the cause of what else that state breaks (a lightly loaded ball over a shoulder)
+    unpropped = side & ((F[2] == 0.0) | ((F[2] > 0.0) & flat & settled))
     reverse = bearing.angular_contact & ((F[2] < 0.0) | unpropped)
     return jnp.where(no_load, RESULTS.no_load, jnp.where(reverse, RESULTS.low_shoulder, code))
 
@@ -621,7 +622,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
     valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
-    code = _load_cause(bearing, op, F, st, jnp.where(code == 0, valid, code)).astype(jnp.int32)
+    code = _load_cause(bearing, op, F, st, jnp.where(code == 0, valid, code), code == 0).astype(jnp.int32)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
