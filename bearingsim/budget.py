@@ -9,17 +9,19 @@ output exceeds the free disk space, raises :class:`~bearingsim.errors.InputError
 naming the keys that size it, before anything is written.  The per-sample costs are measured
 (``docs/scale.md``): they are estimates, meant to catch orders of magnitude, not to bill.
 
-:func:`check_output` refuses an output path that names a directory (nothing is created).
+:func:`check_output` refuses an output path that cannot be written (a directory, a folder the
+system does not let us write in): :class:`~bearingsim.errors.OutputError` (exit 4), nothing created.
 """
 from __future__ import annotations
 
 import os
 import shutil
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import runtime
-from .errors import InputError
+from .errors import InputError, OutputError
 
 __all__ = ["Estimate", "check_case", "check_output", "dataset_estimate", "simulation_estimate",
            "available_memory", "free_disk", "human_bytes", "COMPILE_SECONDS", "program_key",
@@ -228,6 +230,24 @@ def mark_compiled(case, command):
 
 
 def check_output(path, flag="-o"):
-    """Refuse an output path that is an existing directory (exit 2, nothing created)."""
-    if path is not None and Path(path).is_dir():
-        raise InputError(f"{flag} {path} is a directory: give a file name, e.g. {Path(path) / 'out.h5'}")
+    """Refuse an output path that cannot be written, before any work: an existing directory, a
+    parent that is a file, a folder the system will not let us write in (permissions, a read-only
+    or virtual file system such as /sys): :class:`~bearingsim.errors.OutputError` (exit 4) naming
+    the reason.  Nothing is left behind (the probe file is removed at once)."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise OutputError(f"cannot write {flag} {path}: it is a directory; give a file name, e.g. "
+                          f"{p / 'out.h5'}")
+    parent = p.absolute().parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise OutputError(f"cannot write {flag} {path}: {parent} is not a directory")
+    try:
+        with tempfile.TemporaryFile(dir=parent, prefix=".bearingsim-probe-"):
+            pass
+    except OSError as e:
+        raise OutputError(f"cannot write {flag} {path}: {parent} does not accept files "
+                          f"({e.strerror or e})") from None

@@ -73,10 +73,14 @@ def _wrote(*paths):
 
 
 def _warn_failures(result, what):
+    from .jones import RESULTS
+
     codes = np.asarray(result)
     bad = int(np.sum(codes != 0))
     if bad:
-        print(f"bearingsim: warning: {bad} of {codes.size} {what} did not converge; they are "
+        kinds, counts = np.unique(codes[codes != 0], return_counts=True)
+        why = "; ".join(f"{n}: {RESULTS.of(c).message} (result {int(c)})" for c, n in zip(kinds, counts))
+        print(f"bearingsim: warning: {bad} of {codes.size} {what} failed ({why}); they are "
               "flagged in 'converged' (values set to 0)", file=sys.stderr)
 
 
@@ -146,7 +150,7 @@ def cmd_static(args):
 
 
 def _sweep(case, output, plot_dir):
-    sol = workflows.sweep_case(case, throw=False, progress=True)
+    sol = workflows.sweep_case(case, throw="all", progress=True)
     _warn_failures(sol.result, "cage angles")
     io.write_sweep(output, case, sol)
     th = from_si(np.asarray(sol.cage_angle), "deg")

@@ -23,8 +23,11 @@ Design
   output -- finite, no loaded contact with |alpha| >= 90 deg, every ball and the ring in
   equilibrium, contact deformations <= 1 % of D and ring translations within twice the
   groove-centre distance plus that, no angular contact bearing loaded against its low shoulders
-  (F_z < 0 or a ball pushed to -z), not all loads zero at speed -- and otherwise carries its own
-  result code.  Contact pressures above 4.2 GPa
+  (F_z < 0 or a loaded contact at or beyond a low shoulder), no loaded contact centred at or
+  beyond any other groove edge (``over_shoulder``, healthy or with a defect: the one rule of
+  :func:`shoulder_crossings`), not all loads zero at speed -- and otherwise carries its own
+  result code.  Every solver (this one, :mod:`bearingsim.shaft`, the sweeps) uses this check, so
+  the Python API and the command line give the same verdict.  Contact pressures above 4.2 GPa
   are a warning (ISO 76 static-capacity stress: permanent deformation ~1e-4 D starts there).
 
 Unknowns are scaled to micrometres (tilts as micrometres at the groove-centre radius R_i),
@@ -62,8 +65,13 @@ __all__ = [
     "solve_state",
     "solve",
     "solve_batch",
+    "state_validity",
+    "shoulder_crossings",
+    "raise_for",
+    "result_hint",
     "DEFORMATION_LIMIT",
     "PRESSURE_WARNING",
+    "GROOVE_BOTTOM_ANGLE",
 ]
 
 #: largest contact deformation a valid state may hold, as a fraction of the ball diameter D.
@@ -102,12 +110,12 @@ class RESULTS(ResultCode):
                      "beyond the clearance: outside what Hertz theory and the steel can carry",
                      "the loads exceed the bearing's capacity by far; check their units (N, N m)")
     low_shoulder = (7, "the load pushes the balls of an angular contact bearing against its low shoulders "
-                    "(axial load against the contact direction: a ball carries axial load in -z, or a "
-                    "contact lies beyond a low shoulder)",
+                    "(axial load against the contact direction, or too little of it for the radial load "
+                    "or moment: a loaded contact lies at or beyond a low shoulder, or the loaded balls sit "
+                    "at the bottom of the groove)",
                     "a single angular contact bearing carries axial load in one direction only (+Fz, its "
                     "contact direction); for a negative or reversing axial load use a preloaded pair "
                     "(DB back-to-back or DF face-to-face), or turn the bearing round (Fz > 0)")
-    #: set by the workflows from bearingsim.limits (a healthy bearing's static state), not by solve
     over_shoulder = (8, "a loaded contact lies beyond the edge of its groove (contact angle above the "
                      "shoulder angle): the ball rides on the shoulder edge, outside the model",
                      "contact angles climb with the axial load and, at speed, on lightly loaded balls "
@@ -460,14 +468,19 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
     ball_bad = jnp.max(jnp.maximum(jnp.abs(r1), jnp.abs(r2))) > tol
     ring_bad = jnp.max(jnp.abs((R - F) * w)) > tol
     inverted = jnp.any(((st.Q_inner > 0.0) & (ci <= 0.0)) | ((st.Q_outer > 0.0) & (co <= 0.0)))
-    # an angular contact bearing (low shoulders, MODEL.md 11) carries axial load in +z only: no
-    # loaded contact may lie beyond its low shoulder (a contact a few degrees below 0 under a
-    # combined load is still on the groove, inside the low shoulder angle); the geometric
-    # ellipse checks against the groove edges are bearingsim.limits: flags, refused by the workflows
-    low = bearing.shoulders
-    reversed_ball = jnp.any(((st.Q_inner > 0.0) & (si < -jnp.sin(low[..., 1:2]))) |
-                            ((st.Q_outer > 0.0) & (so < -jnp.sin(low[..., 3:4]))))
-    low_shoulder = bearing.angular_contact & (reversed_ball | (F[2] < 0.0))
+    # the groove edges (MODEL.md 11, the rule of bearingsim.limits.contact_limits): a loaded
+    # contact centred at or beyond an edge has the ball riding on the shoulder, outside the model,
+    # healthy or over a defect (the contact centre is where the Hertz contact is, either way).
+    # An angular contact bearing (low shoulders) carries axial load in +z only: a loaded contact at
+    # or beyond a low shoulder, or F_z < 0, is ``low_shoulder`` (a contact a few degrees below 0
+    # under a combined load is still on the groove, inside the low shoulder angle); any other
+    # edge (a high shoulder; either edge of a deep groove) is ``over_shoulder``.  The ellipse's
+    # half-width running over an edge (truncation) is a flag of the limits, not a refusal.
+    high_edge, low_edge = shoulder_crossings(bearing, st.alpha_inner, st.alpha_outer, st.Q_inner,
+                                             st.Q_outer)
+    acbb = bearing.angular_contact
+    low_shoulder = acbb & (low_edge | (F[2] < 0.0))
+    over_shoulder = high_edge | (~acbb & low_edge)
     d_lim = DEFORMATION_LIMIT * D
     deform = jnp.maximum(jnp.where(st.Q_inner > 0.0, st.delta_inner, 0.0),
                          jnp.where(st.Q_outer > 0.0, st.delta_outer, 0.0))
@@ -484,14 +497,45 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
         inverted, RESULTS.inverted_contact, jnp.where(
             low_shoulder, RESULTS.low_shoulder, jnp.where(
                 bounds, RESULTS.beyond_bounds, jnp.where(
-                    ball_bad | ring_bad, RESULTS.equilibrium, RESULTS.successful))))).astype(jnp.int32)
+                    ball_bad | ring_bad, RESULTS.equilibrium, jnp.where(
+                        over_shoulder, RESULTS.over_shoulder, RESULTS.successful)))))).astype(jnp.int32)
 
 
-def _load_cause(bearing, op, F, code):
-    """The cause that the loads alone name, whatever the Newton iteration did: no load at speed
-    (9), a negative axial load on an angular contact bearing (7); else ``code``."""
+def shoulder_crossings(bearing, alpha_inner, alpha_outer, Q_inner, Q_outer):
+    """(high, low): whether a loaded contact (Q > 0) is centred at or beyond a high shoulder's
+    edge (alpha >= theta_high) or a low one's (alpha <= -theta_low) of ``bearing.shoulders``;
+    per-ball arrays (..., Z) are reduced over the balls.  The one rule of every solve's validity
+    (result codes 7 and 8) and of :func:`bearingsim.limits.contact_limits`' ``over_shoulder``."""
+    sh = bearing.shoulders
+    li, lo = Q_inner > 0.0, Q_outer > 0.0
+    high = (li & (alpha_inner >= sh[..., 0, None])) | (lo & (alpha_outer >= sh[..., 2, None]))
+    low = (li & (alpha_inner <= -sh[..., 1, None])) | (lo & (alpha_outer <= -sh[..., 3, None]))
+    return jnp.any(high, axis=-1), jnp.any(low, axis=-1)
+
+
+#: a single angular contact bearing whose most loaded inner contact lies below this angle (rad)
+#: carries its load at the bottom of the groove: the axial load is too small for the radial load
+#: or the moment (tan alpha ~ F_z / F_r with one ball loaded), a degenerate state (issue 27)
+GROOVE_BOTTOM_ANGLE = np.radians(1.0)
+
+
+def _load_cause(bearing, op, F, st, code, settled=True):
+    """The cause that the loads name, whatever the Newton iteration did: no load at speed (9); on
+    a single angular contact bearing a negative axial load, or none (or too little) under a radial
+    load or a moment (7): each loaded contact's axial component pushes the inner ring against the
+    contact direction until the loaded balls sit at the bottom of the groove, where one or two
+    balls carry the load (the most loaded inner contact below :data:`GROOVE_BOTTOM_ANGLE`; tan
+    alpha ~ F_z / F_r), a degenerate state, not the bearing's; else ``code``.  Single bearings
+    only: in a set the other bearings hold the ring (:mod:`bearingsim.shaft`)."""
     no_load = jnp.all(F == 0.0) & (op.speed > 0.0)
-    reverse = bearing.angular_contact & (F[2] < 0.0)
+    side = jnp.any(F[jnp.asarray([0, 1, 3, 4])] != 0.0)
+    k = jnp.argmax(st.Q_inner)
+    flat = (st.Q_inner[k] > 0.0) & (st.alpha_inner[k] < GROOVE_BOTTOM_ANGLE)
+    # F_z = 0 names the cause whatever the iteration did; the groove-bottom state only where the
+    # iteration converged on it (``settled``: a failed iteration's last iterate says nothing); it
+    # is the cause of what else that state breaks (a lightly loaded ball over a shoulder)
+    unpropped = side & ((F[2] == 0.0) | ((F[2] > 0.0) & flat & settled))
+    reverse = bearing.angular_contact & ((F[2] < 0.0) | unpropped)
     return jnp.where(no_load, RESULTS.no_load, jnp.where(reverse, RESULTS.low_shoulder, code))
 
 
@@ -578,7 +622,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
     valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
-    code = _load_cause(bearing, op, F, jnp.where(code == 0, valid, code)).astype(jnp.int32)
+    code = _load_cause(bearing, op, F, st, jnp.where(code == 0, valid, code), code == 0).astype(jnp.int32)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
@@ -607,10 +651,12 @@ def _traced(maxit, rtol, atol):
     return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
 
 
-def raise_for(sol: JonesSolution, what: str = "Jones solve"):
+def raise_for(sol, what: str = "Jones solve", *, bearing=None, in_set=False):
     """Raise :class:`NotConvergedError` / :class:`InvalidStateError` for a failed solution
     (single or batched, any batch shape: the first failed item in flat (C) order is described,
-    the count is given)."""
+    the count is given).  ``sol``: anything with ``result``, ``residual_norm``, ``iterations`` and
+    ``loads`` (a :class:`JonesSolution`, a set's :class:`~bearingsim.shaft.SetSolution`); the hint
+    fits the case (:func:`result_hint`: ``bearing``, ``in_set``)."""
     codes = np.ravel(np.asarray(sol.result))          # any batch shape, flattened
     bad = np.flatnonzero(codes != 0)
     if not bad.size:
@@ -624,13 +670,57 @@ def raise_for(sol: JonesSolution, what: str = "Jones solve"):
                                      RESULTS.low_shoulder, RESULTS.over_shoulder,
                                      RESULTS.no_load) else NotConvergedError
     loads = ""
+    F = None
     if r in (RESULTS.low_shoulder, RESULTS.over_shoulder, RESULTS.no_load, RESULTS.beyond_bounds):
         Fs = np.reshape(np.asarray(sol.loads), (-1, 5))
         F = Fs[min(k, len(Fs) - 1)]
         loads = ("; loads: axial Fz = {:.6g} N, radial Fx = {:.6g} N, Fy = {:.6g} N, moments Mx = {:.6g} N m, "
                  "My = {:.6g} N m").format(F[2], F[0], F[1], F[3], F[4])
     raise cls(f"{what} failed{where}: {r.message}{loads} (after {it} iterations, residual {res:.3g} N)",
-              r.hint, r)
+              result_hint(r, F, bearing=bearing, in_set=in_set), r)
+
+
+def result_hint(code, loads=None, *, bearing=None, in_set=False) -> str:
+    """The hint for result ``code`` that fits the case: the loads ``[Fx, Fy, Fz, Mx, My]`` (N, N m;
+    None: unknown), the ``bearing`` (its free contact angle) and whether it is one bearing of a
+    set (``in_set``: a preloaded pair already).  The code's own hint where nothing more is known."""
+    r = RESULTS.of(code)
+    F = None if loads is None else np.asarray(loads, float).reshape(-1)[:5]
+    Fr = None if F is None else float(np.hypot(F[0], F[1]))
+    M = None if F is None else float(np.hypot(F[3], F[4]))
+    acbb_angle = None
+    if bearing is not None and bool(np.all(np.asarray(bearing.angular_contact))):
+        acbb_angle = float(np.ravel(np.asarray(bearing.free_contact_angle))[0])
+    if r == RESULTS.low_shoulder:
+        if in_set:
+            return ("in a set a bearing is pushed against its low shoulders when the axial load (or the "
+                    "moment) against its contact direction exceeds what the preload and the bearings "
+                    "facing the other way hold: turn or add bearings to face the load (DB, DF, TBT carry "
+                    "both directions, a DT pair one only), raise the preload, or lower the axial load")
+        if F is not None and F[2] < 0.0:
+            return r.hint
+        if F is not None and (Fr > 0.0 or M > 0.0):
+            need = "" if acbb_angle is None else (
+                f"; at least ~1.25 Fr tan(alpha_0) = {1.25 * Fr * np.tan(acbb_angle):.4g} N keeps half "
+                "the balls loaded")
+            return (f"an angular contact bearing without enough axial load (here Fz = {F[2]:.4g} N against "
+                    f"Fr = {Fr:.4g} N and a moment of {M:.4g} N m) cannot carry radial load or a moment: "
+                    "each loaded contact's axial component pushes the inner ring against the contact "
+                    "direction until the loaded balls sit at the bottom of the groove (or beyond a low "
+                    "shoulder) and one or two balls carry the load, outside the model; give more axial "
+                    f"load in the contact direction{need}, or use a preloaded pair (DB or DF)")
+        return r.hint
+    if r == RESULTS.beyond_bounds and in_set:
+        return ("the loads or the set's preload exceed a bearing's capacity by far: check their values "
+                "and units (N, N m); a preload is of the order of 1 % of the bearing's static axial "
+                "capacity C_0a (the preload classes light / medium / heavy)")
+    if r in (RESULTS.beyond_bounds, RESULTS.stagnated, RESULTS.max_iterations) and F is not None \
+            and acbb_angle is not None and Fr > 0.0 and F[2] < 1.25 * Fr * np.tan(acbb_angle):
+        return (f"an angular contact bearing carries radial load only with an axial load in its "
+                f"contact direction: here Fz = {F[2]:.4g} N against Fr = {Fr:.4g} N; at least "
+                f"~1.25 Fr tan(alpha_0) = {1.25 * Fr * np.tan(acbb_angle):.4g} N keeps half the balls "
+                "loaded (give more axial load or use a preloaded pair); else " + r.hint)
+    return r.hint
 
 
 def _warn_overload(sol):
@@ -667,7 +757,7 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
         if bool(_better(retry.result, sol.result)):
             sol = retry
     if throw:
-        raise_for(sol)
+        raise_for(sol, bearing=bearing)
     _warn_overload(sol)
     return sol
 
@@ -736,7 +826,7 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
 
         sol = jax.tree_util.tree_map(merge, sol, retry)
     if throw:
-        raise_for(sol, "Jones batch solve")
+        raise_for(sol, "Jones batch solve", bearing=bearing)
     return sol
 
 

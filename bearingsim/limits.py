@@ -3,9 +3,9 @@ friction coefficient that raceway control needs, the contact ellipse against the
 
 Pure ``jax.numpy`` on a :class:`~bearingsim.jones.JonesSolution` (any leading batch axes, balls
 last) and its :class:`~bearingsim.geometry.Bearing` and :class:`~bearingsim.kinematics.Operation`;
-SI and radians.  Nothing here refuses a state: the margins and flags are for the report (the
-workflows refuse a static state whose contact centre lies beyond a shoulder, result
-``over_shoulder``).
+SI and radians.  Nothing here refuses a state: the margins and flags are for the report (every
+solve refuses a state whose loaded contact centre lies at or beyond a shoulder edge, result
+``over_shoulder`` or ``low_shoulder``, by the same rule: :func:`bearingsim.jones.shoulder_crossings`).
 
 * Pressure: ``p_max / pressure_limit`` per contact; the ISO 76 static-capacity stress of ball
   bearings, 4.2 GPa, is the default (permanent deformation ~1e-4 D starts there).

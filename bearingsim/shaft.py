@@ -891,8 +891,9 @@ _solve_jit = jit(solve_set_state)
 
 
 def raise_for_set(sol: SetSolution, what: str = "set solve"):
-    """Raise for the first failed item (see :func:`bearingsim.jones.raise_for`), naming the
-    bearing whose own check failed where one did."""
+    """Raise for the first failed item (see :func:`bearingsim.jones.raise_for`: the set's
+    ``result``, its external loads), naming the bearing whose own check failed where one did and
+    the axial load it carries, with the hint for a bearing in a set."""
     codes = np.ravel(np.asarray(sol.result))
     bad = np.flatnonzero(codes != 0)
     if not bad.size:
@@ -901,18 +902,10 @@ def raise_for_set(sol: SetSolution, what: str = "set solve"):
     k = int(bad[0])
     which = np.flatnonzero(per[k] != 0)
     if which.size:
-        what = f"{what} (bearing {int(which[0]) + 1} of {sol.n})"
-    raise_for(_as_codes(sol), what)
-
-
-class _Codes(eqx.Module):
-    result: jnp.ndarray
-    residual_norm: jnp.ndarray
-    iterations: jnp.ndarray
-
-
-def _as_codes(sol):
-    return _Codes(sol.result, sol.residual_norm, sol.iterations)
+        j = int(which[0])
+        Fk = float(np.ravel(np.asarray(sol.bearings[j].loads[..., 2]))[k])
+        what = f"{what} (bearing {j + 1} of {sol.n}, carrying {Fk:.6g} N axially in its contact direction)"
+    raise_for(sol, what, in_set=True)
 
 
 def _traced(maxit, rtol, atol):
@@ -935,7 +928,34 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
             sol = retry
     if throw:
         raise_for_set(sol)
+    _warn_set_overload(bset, sol)
     return sol
+
+
+def _warn_set_overload(bset, sol):
+    """Warn (:class:`~bearingsim.jones.OverloadWarning`, as a single bearing's solve does) when a
+    converged set has a contact above :data:`~bearingsim.jones.PRESSURE_WARNING`, naming the
+    bearing, and its preload where that alone exceeds its static axial capacity C_0a."""
+    import warnings
+
+    from .jones import PRESSURE_WARNING, OverloadWarning
+
+    if int(sol.result) != 0:
+        return
+    p = np.asarray(sol.max_pressure)
+    for k in np.flatnonzero(p > PRESSURE_WARNING):
+        k = int(k)
+        P = float(np.asarray(sol.preload)[k])
+        extra = ""
+        if P > 0.0:
+            C0a = float(static_axial_capacity(bset.bearings[k]))
+            if P > C0a:
+                extra = (f"; its preload {P:.6g} N is above its static axial capacity C_0a = {C0a:.6g} N "
+                         "(the thrust that alone gives 4.2 GPa at standstill): lower the preload")
+        warnings.warn(f"bearing {k + 1} of {sol.n}: contact pressure {p[k] / 1e9:.2f} GPa exceeds "
+                      f"{PRESSURE_WARNING / 1e9:.1f} GPa (ISO 76 static-capacity stress): the steel deforms "
+                      f"permanently; the Hertz result is an elastic idealisation{extra}", OverloadWarning,
+                      stacklevel=3)
 
 
 def _solve_batch(bset, op, loads, cage_angle, spalls, preload, facings, positions, springs,

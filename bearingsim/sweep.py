@@ -181,7 +181,7 @@ def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, 
     sol = _run(bearing, op, loads, spall, jnp.asarray(angles, dtype=jnp.float64), cs, which, maxit,
                rtol, atol, hertz_method)
     if throw:
-        raise_for(sol, "cage-angle sweep")
+        raise_for(sol, "cage-angle sweep", bearing=bearing)
     return sol
 
 
@@ -268,7 +268,7 @@ def sweep_defect_angle(bearing, op, loads, spall, centers=None, *, which=0, cage
     angles = jnp.full(centers.shape, float(cage_angle), dtype=jnp.float64)
     sol = _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, hertz_method)
     if throw:
-        raise_for(sol, "defect-angle sweep")
+        raise_for(sol, "defect-angle sweep", bearing=bearing)
     return sol
 
 

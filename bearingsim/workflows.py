@@ -35,7 +35,7 @@ from .case import check_sampling, unit_of
 from .case.units import from_si
 from .errors import InputError, NotConvergedError
 
-__all__ = ["solve_case", "refuse_over_shoulder", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
+__all__ = ["solve_case", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
            "spectrum_file", "calibrate_case", "envelope_band", "simulation_spectrum", "Study", "Comparison",
            "EnvelopeAnalysis", "STUDY_CHUNK"]
 
@@ -50,47 +50,30 @@ def _progress(total, desc, unit, progress):
 
 def _check(sol, case, what, throw):
     """With ``throw``, raise NotConvergedError / InvalidStateError for a quasi-static solution
-    (single or batch) with a failed item, naming the case file, the reason and the count."""
+    (single or batch) with a failed item, naming the case file, the reason and the count;
+    ``throw="all"``: only when every item failed (a sweep with no valid state at all has the
+    verdict of a single solve, e.g. a reverse axial load)."""
     from .jones import raise_for
 
+    if throw == "all":
+        throw = bool(np.all(np.asarray(sol.result) != 0))
     if throw:
-        raise_for(sol, f"{case.source}: {what}")
+        raise_for(sol, f"{case.source}: {what}", bearing=case.bearing())
     return sol
 
 
 # ------------------------------------------------------------------------------------ solve
 def solve_case(case, *, throw=True):
-    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``).  A healthy
-    bearing's converged state with a loaded contact centred at or beyond a shoulder edge is refused
-    (:func:`refuse_over_shoulder`); with a defect it is flagged in the limits (a ball over the
-    defect may climb a shoulder at one cage angle)."""
+    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``).  The verdict is
+    the core's (:func:`bearingsim.jones.solve`: a loaded contact centred at or beyond a shoulder
+    edge is result 8, or 7 at an angular contact bearing's low edge, healthy or with a defect);
+    nothing is decided here."""
     import bearingsim as bs
 
     b, op, spall = case.bearing(), case.operation(), case.spall()
     sol = bs.solve(b, op, case.loads(), cage_angle=case.cage_angle,
                    spall=spall, hertz_method=case.hertz_method, throw=False)
-    if spall is None:
-        sol = refuse_over_shoulder(sol, b, op)
     return _check(sol, case, "the quasi-static solve", throw)
-
-
-def refuse_over_shoulder(sol, bearing, op):
-    """``sol`` with result ``over_shoulder`` (8) when a converged state has a loaded contact centred
-    at or beyond a shoulder edge, or ``low_shoulder`` (7) when that edge is an angular contact
-    bearing's low one; else ``sol`` itself (single state)."""
-    import equinox as eqx
-    import jax.numpy as jnp
-
-    from .jones import RESULTS
-    from .limits import contact_limits
-
-    if int(sol.result) != 0 or not bool(contact_limits(sol, bearing, op.control).any_over_shoulder):
-        return sol
-    sh = np.asarray(bearing.shoulders)
-    low = np.any((np.asarray(sol.Q_inner) > 0) & (np.asarray(sol.alpha_inner) <= -sh[1])) or np.any(
-        (np.asarray(sol.Q_outer) > 0) & (np.asarray(sol.alpha_outer) <= -sh[3]))
-    code = RESULTS.low_shoulder if (low and bool(bearing.angular_contact)) else RESULTS.over_shoulder
-    return eqx.tree_at(lambda s: s.result, sol, jnp.asarray(int(code), jnp.int32))
 
 
 @dataclass(frozen=True)
@@ -152,7 +135,9 @@ def assess_case(case, sol) -> Assessment:
 
 def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):
     """Quasi-static states over the case's ``[sweep]`` cage angles (both sides of every
-    rectangular-spall edge inserted unless ``resolve_edges=False``)."""
+    rectangular-spall edge inserted unless ``resolve_edges=False``).  ``throw``: True raises for
+    any failed angle, ``"all"`` (``bearingsim sweep``) only when every angle failed, False never
+    (codes per angle)."""
     from .sweep import sweep_angles, sweep_chunked
 
     b, spall = case.bearing(), case.spall()

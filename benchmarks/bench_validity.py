@@ -7,7 +7,14 @@ no loaded contact with |alpha| >= 90 deg, ring and ball equilibrium to 1e-8 of t
 everything finite.  Prints counts: converged, flagged (by result code) and converged-but-invalid
 (must be 0).
 
-    python benchmarks/bench_validity.py [N_PER_GROUP]   (default 200: 12 groups -> 2400 cases)
+Then (issue 27) the verdicts of the Python API and of the command line on the same 1000 random
+cases of the Harris 218 (the demo bearing; 0-12 000 rpm, thrust 0-20 kN, radial loads to 6 kN,
+moments to 200 N m, a third with the demo spall): ``bearingsim.solve`` against
+``workflows.solve_case`` of the case file (what ``bearingsim static`` runs), and the command's
+exit code on a sample; prints how many codes differ (target 0) and how many converged states have
+a loaded contact at or beyond a shoulder (target 0).
+
+    python benchmarks/bench_validity.py [N_PER_GROUP] [N_VERDICT]   (defaults 200 -> 2400 cases; 1000)
 """
 from __future__ import annotations
 
@@ -122,5 +129,88 @@ def main(n=200, seed=0):
     return total
 
 
+B218_CASE = """\
+title = "random 218"
+[bearing]
+balls = 16
+ball_diameter_mm = 22.225
+pitch_diameter_mm = 125.26
+inner_groove_curvature = 0.5232
+outer_groove_curvature = 0.5232
+free_contact_angle_deg = 40.0
+[operation]
+speed_rpm = {rpm}
+cage_angle_deg = {cage}
+[load]
+axial_N = {Fa}
+radial_x_N = {Fx}
+radial_y_N = {Fy}
+moment_x_Nm = {Mx}
+moment_y_Nm = {My}
+"""
+DEFECT = '[defect]\ncenter_deg = 0.0\nextent_deg = 3.0\ndepth_mm = 0.3\nprofile = "rectangular"\n'
+
+
+def verdicts(n=1000, seed=27, cli_sample=40, tmp=None):
+    """Codes of ``bearingsim.solve`` and of the command line's path on n random 218 cases."""
+    import tempfile
+    import warnings
+    from pathlib import Path
+
+    from bearingsim import workflows
+    from bearingsim.case import parse_case
+    from bearingsim.cli import main as cli_main
+    from bearingsim.limits import contact_limits
+
+    rng = np.random.default_rng(seed)
+    rpm = rng.choice([0.0, 6000.0, 10000.0, 12000.0], n)
+    Fa = rng.uniform(0.0, 20000.0, n)
+    Fx, Fy = rng.uniform(-6000.0, 6000.0, (2, n))
+    Mx, My = rng.uniform(-200.0, 200.0, (2, n))
+    cage = rng.uniform(0.0, 22.5, n)
+    defect = rng.uniform(size=n) < 1.0 / 3.0
+    differ, over, codes = [], 0, {}
+    cli_rows = set(rng.choice(n, min(cli_sample, n), replace=False).tolist())
+    cli_differ = []
+    tmp = Path(tempfile.mkdtemp() if tmp is None else tmp)
+    t0 = time.perf_counter()
+    for k in range(n):
+        text = B218_CASE.format(rpm=rpm[k], cage=cage[k], Fa=Fa[k], Fx=Fx[k], Fy=Fy[k], Mx=Mx[k],
+                                My=My[k]) + (DEFECT if defect[k] else "")
+        case = parse_case(text, f"r{k}.toml")
+        b, op = case.bearing(), case.operation()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            api = bs.solve(b, op, case.loads(), cage_angle=case.cage_angle, spall=case.spall(), throw=False)
+            cli = workflows.solve_case(case, throw=False)
+        a, c = int(api.result), int(cli.result)
+        codes[a] = codes.get(a, 0) + 1
+        if a != c:
+            differ.append((k, a, c))
+        if a == 0 and bool(contact_limits(api, b, op.control).any_over_shoulder):
+            over += 1
+        if k in cli_rows:               # the command itself: exit 0 for code 0, 3 for a refusal
+            p = tmp / f"r{k}.toml"
+            p.write_text(text)
+            import contextlib
+            import io as _io
+            with contextlib.redirect_stdout(_io.StringIO()), contextlib.redirect_stderr(_io.StringIO()), \
+                    warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                rc = cli_main(["static", str(p)])
+            if rc != (0 if a == 0 else 3):
+                cli_differ.append((k, a, rc))
+    dt = time.perf_counter() - t0
+    print(f"\nPython API vs command line on {n} random 218 cases (seed {seed}, a third with the demo spall): "
+          f"codes differ in {len(differ)} (target 0); `bearingsim static` exit codes checked on {len(cli_rows)}: "
+          f"{len(cli_differ)} differ (target 0); converged states with a loaded contact at or beyond a "
+          f"shoulder: {over} (target 0); codes "
+          f"{', '.join(f'{bs.RESULTS.of(k).name}: {v}' for k, v in sorted(codes.items()))}; {dt:.1f} s")
+    for row in (differ + cli_differ)[:5]:
+        print("   differs:", row)
+    return dict(differ=len(differ), cli_differ=len(cli_differ), over=over, codes=codes)
+
+
 if __name__ == "__main__":
     main(int(sys.argv[1]) if len(sys.argv) > 1 else 200)
+    verdicts(int(sys.argv[2]) if len(sys.argv) > 2 else 1000)

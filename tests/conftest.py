@@ -69,6 +69,15 @@ def beyond_low_shoulder(b, sol):
     return bool(np.any((Qi > 0) & (np.sin(ai) <= -np.sin(sh[1]))) or np.any((Qo > 0) & (np.sin(ao) <= -np.sin(sh[3]))))
 
 
+def beyond_high_shoulder(b, sol):
+    """True when a loaded contact lies at or beyond a high shoulder's edge (MODEL.md 11), from the
+    reported per-ball angles alone (the ball rides on the shoulder: result ``over_shoulder``)."""
+    sh = np.asarray(b.shoulders)
+    Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
+    ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
+    return bool(np.any((Qi > 0) & (ai >= sh[0])) or np.any((Qo > 0) & (ao >= sh[2])))
+
+
 def inverted_contacts(sol):
     """Number of loaded contacts whose normal points out of the raceway (MODEL.md section 3)."""
     ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)

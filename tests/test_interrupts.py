@@ -54,9 +54,10 @@ def test_simulation_and_sweep_too_large_are_refused(tmp_path, capsys):
 
 
 def test_output_that_is_a_directory(tmp_path, capsys):
+    """Exit 4 (OutputError, issue 27: it was 2), nothing created."""
     p = _write(tmp_path, spec().text)
     (tmp_path / "out").mkdir()
-    assert main(["dataset", str(p), "-o", str(tmp_path / "out")]) == 2
+    assert main(["dataset", str(p), "-o", str(tmp_path / "out")]) == 4
     assert "is a directory" in capsys.readouterr().err
     assert sorted(q.name for q in tmp_path.iterdir()) == ["out", "spec.toml"]
     assert list((tmp_path / "out").iterdir()) == []

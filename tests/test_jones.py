@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 import bearingsim as bs
 from bearingsim import jones
 from bearingsim.xla import compiler_options
-from conftest import DEG, ball_equilibrium_error, beyond_low_shoulder, equilibrium_error, inverted_contacts
+from conftest import DEG, ball_equilibrium_error, beyond_high_shoulder, beyond_low_shoulder, equilibrium_error, inverted_contacts
 
 
 # ---------------------------------------------------------------------------- symmetry, limits
@@ -103,18 +103,23 @@ def test_global_equilibrium_random_combined_loads(b218, Fa, Fx, Fy, Mx, My, rpm,
     relative (the solver's tolerance is 1e-11 of the largest load).
 
     Part of this load space lies outside the model at speed (about 1 draw in 260 at 12 krpm: a
-    lightly loaded ball's contact crosses the 218's low shoulder at -11.22 deg).  A refusal is
-    accepted only when an independent check of the returned state confirms its reason (a loaded
-    contact at or beyond the low shoulder, from the per-ball angles); any other refusal fails."""
+    lightly loaded ball's contact crosses the 218's low shoulder at -11.22 deg; near it others
+    climb over the 74 deg high shoulder).  A refusal is accepted only when an independent check of
+    the returned state confirms its reason (a loaded contact at or beyond the low shoulder, code
+    7, or the high one, code 8, from the per-ball angles); any other refusal fails."""
     op = bs.Operation.from_rpm(rpm)
     sol = bs.solve(b218, op, bs.Loads(axial=Fa, radial_x=Fx, radial_y=Fy, moment_x=Mx, moment_y=My),
                    cage_angle=cage, throw=False)
     code = int(sol.result)
     if code != 0:
-        assert code == int(jones.RESULTS.low_shoulder), (code, jones.RESULTS.of(code).message)
-        assert beyond_low_shoulder(b218, sol), "refused as low shoulder, but no loaded contact is beyond it"
+        assert code in (int(jones.RESULTS.low_shoulder), int(jones.RESULTS.over_shoulder)), (
+            code, jones.RESULTS.of(code).message)
+        if code == int(jones.RESULTS.low_shoulder):
+            assert beyond_low_shoulder(b218, sol), "refused as low shoulder, but no loaded contact is beyond it"
+        else:
+            assert beyond_high_shoulder(b218, sol), "refused as over the shoulder, but no loaded contact is"
         return
-    assert not beyond_low_shoulder(b218, sol)
+    assert not beyond_low_shoulder(b218, sol) and not beyond_high_shoulder(b218, sol)
     assert equilibrium_error(b218, sol, op) <= 1e-9
     assert ball_equilibrium_error(b218, sol, op) <= 1e-9
     for arr in (sol.Q_inner, sol.Q_outer, sol.alpha_inner, sol.alpha_outer, sol.stiffness):
@@ -141,10 +146,12 @@ def test_equilibrium_each_raceway_control(b218, control):
 
 
 # ---------------------------------------------------------------------------- stiffness, gradients
-@pytest.mark.parametrize("rpm", [0.0, 12000.0])
+@pytest.mark.parametrize("rpm", [0.0, 10000.0])
 def test_stiffness_equals_central_difference(b218, rpm):
     """The Schur-complement stiffness equals central differences of the load-displacement map
-    (balls iterated to convergence), to 2e-5 (the difference quotient's truncation)."""
+    (balls iterated to convergence), to 2e-5 (the difference quotient's truncation).  (At 12 krpm
+    this load puts an inner contact at 75.9 deg, over the 74.1 deg high shoulder: solve refuses it
+    since issue 27, so the speed case runs at 10 krpm, inner contacts up to 71.5 deg.)"""
     op = bs.Operation.from_rpm(rpm)
     sol = bs.solve(b218, op, bs.Loads(axial=10000.0, radial_x=3000.0, moment_y=50.0), cage_angle=0.1)
     q = sol.displacement

@@ -5,6 +5,7 @@ Compiled programs are shared: one N = 1 set program (both facings in one batch),
 every rigid two-bearing set of the 218 (DB, DF, DT, loads, speeds, preloads in batches), one
 with a spring-preloaded bearing, one two-support rotor, and one single-bearing batch.
 """
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ import bearingsim as bs
 from bearingsim import shaft
 from bearingsim.errors import InputError
 from bearingsim.jones import solve_batch
+from conftest import beyond_high_shoulder
 
 D218 = dict(n_balls=16, ball_diameter=22.225e-3, pitch_diameter=125.26e-3, f_inner=0.5232,
             f_outer=0.5232, free_contact_angle=np.deg2rad(40.0))
@@ -230,7 +232,14 @@ def test_defect_in_one_bearing_swept_over_the_cage_angle(b218):
     F = jnp.array([6000.0, 0.0, 0.0, 0.0, 0.0])
     sol = shaft.solve_set_batch(bset, bs.Operation.from_rpm(3000.0), jnp.tile(F, (n, 1)),
                                 cage_angle=jnp.stack([th, np.zeros(n)], axis=1), spalls=(spall, None))
-    assert np.all(np.asarray(sol.result) == 0), sol.message()
+    # with ball 0 over the 0.3 mm spall its inner contact (a few N) lies beyond bearing 1's 74 deg
+    # inner shoulder at some angles: refused (result 8, issue 27), confirmed from the per-ball
+    # angles; the states are still the solver's own and the shaft's equilibrium is checked on all
+    codes = np.asarray(sol.result)
+    assert set(np.unique(codes)) <= {0, 8} and codes[0] == 0 and codes[-1] == 0, sol.message()
+    for k in np.flatnonzero(codes == 8):
+        assert int(np.asarray(sol.bearing_result)[k, 1]) == 0
+        assert beyond_high_shoulder(b218, jax.tree_util.tree_map(lambda a: a[k], sol.bearings[0]))
     R = np.asarray(sol.shaft_reactions())                     # (n, 2, 5)
     np.testing.assert_allclose(R.sum(axis=1)[:, 0], 6000.0, rtol=1e-9)
     share1 = R[:, 0, 0]

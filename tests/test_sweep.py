@@ -5,7 +5,7 @@ import pytest
 
 import bearingsim as bs
 from bearingsim.sweep import spall_edge_angles, sweep, sweep_angles
-from conftest import DEG, ball_equilibrium_error, equilibrium_error, inverted_contacts
+from conftest import DEG, ball_equilibrium_error, beyond_high_shoulder, equilibrium_error, inverted_contacts
 
 N = 61                                  # one sweep length for every test: one compilation
 LOADS = bs.Loads(axial=10000.0, radial_x=3000.0)
@@ -27,11 +27,28 @@ def sweeps(b218):
     return out
 
 
+def _confirmed(b, s, codes):
+    """Every refused angle is the ball over the spall touching the inner ring beyond its high
+    shoulder (result 8, issue 27: ~10 N at 78.8 deg over the 74.1 deg edge at 10 krpm), checked
+    from the per-ball angles alone."""
+    assert set(np.unique(codes)) <= {0, 8}, np.unique(codes)
+    for n in np.flatnonzero(codes == 8):
+        assert beyond_high_shoulder(b, jax.tree_util.tree_map(lambda a: a[n], s)), n
+
+
 def test_sweeps_converge_with_global_equilibrium_everywhere(b218, sweeps):
+    """Every angle converges (at rest) or is refused for a confirmed reason (at 10 krpm the ball in
+    the 0.3 mm spall rides on the inner shoulder's edge: result 8); the rest hold equilibrium."""
     for (rpm, prof), s in sweeps.items():
         op = bs.Operation.from_rpm(rpm)
-        assert np.all(np.asarray(s.result) == 0), (rpm, prof)
+        codes = np.asarray(s.result)
+        if rpm == 0.0:
+            assert np.all(codes == 0), (rpm, prof)
+        _confirmed(b218, s, codes)
+        assert np.mean(codes == 0) > 0.6, (rpm, prof)
         for n in range(0, N, 6):
+            if codes[n]:
+                continue
             one = jax.tree_util.tree_map(lambda a: a[n], s)
             assert equilibrium_error(b218, one, op) <= 1e-9
             assert ball_equilibrium_error(b218, one, op) <= 1e-9
@@ -55,7 +72,7 @@ def test_ball_path_sweep_is_continuous_rectangular_jumps(b218):
     out = {}
     for prof in ("ball-path", "rectangular"):
         s = sweep(b218, op, LOADS, bs.Spall(0.0, 6 * DEG, 0.3e-3, prof), angles=fine)
-        assert np.all(np.asarray(s.result) == 0)
+        _confirmed(b218, s, np.asarray(s.result))      # the returned states are the solver's own
         scale = float(np.max(s.Q_outer))
         out[prof] = np.max(np.abs(np.diff(np.asarray(s.Q_outer), axis=0))) / scale
     assert out["rectangular"] > 0.2              # a ball drops into the recess at once
@@ -78,7 +95,8 @@ def test_sweep_equals_independent_cold_solves(b218, sweeps):
     s = sweeps[10000.0, "rectangular"]
     for n in (0, 17, 30, 44):
         one = bs.solve(b218, bs.Operation.from_rpm(10000.0), LOADS, cage_angle=grid()[n],
-                       spall=bs.Spall(0.0, 6 * DEG, 0.3e-3, "rectangular"))
+                       spall=bs.Spall(0.0, 6 * DEG, 0.3e-3, "rectangular"), throw=False)
+        assert int(one.result) == int(s.result[n])          # the same verdict (0, or 8 over the spall)
         np.testing.assert_allclose(s.Q_outer[n], one.Q_outer, rtol=1e-8, atol=1e-6)
         np.testing.assert_allclose(s.displacement[n], one.displacement, rtol=1e-8, atol=1e-14)
 

@@ -3,6 +3,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import h5py
+import jax
 import numpy as np
 import pytest
 
@@ -10,6 +11,7 @@ import bearingsim
 import bearingsim.sweep
 from bearingsim import workflows
 from bearingsim.case import parse_case
+from conftest import beyond_high_shoulder
 from bearingsim.errors import InputError, InvalidStateError, NotConvergedError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -77,22 +79,31 @@ def test_failed_states_raise_or_are_flagged(monkeypatch):
 
 
 def test_study_of_loads_is_one_batch_equal_to_one_sweep_per_value():
+    # the ball over the 0.3 mm spall at 10 krpm touches the inner ring beyond its 74 deg shoulder at
+    # some angles: those are refused (result 8, issue 27), the same in the batch and the sweeps
     case = study("load.axial_N", [10000, 14000])
-    st = workflows.study_case(case)
+    st = workflows.study_case(case, throw=False)
     assert st.batched and st.unit == "N" and st.parameter == "load.axial_N"
-    assert np.asarray(st.solution.Q_outer).shape == (2, 61, 16) and np.all(st.converged)
+    codes = np.asarray(st.solution.result)
+    assert np.asarray(st.solution.Q_outer).shape == (2, 61, 16) and set(np.unique(codes)) <= {0, 8}
+    assert np.mean(st.converged) > 0.6
     for m, c in enumerate(case.study_cases()):
         s = c.sweep_settings()
         ref = bearingsim.sweep.sweep(c.bearing(), c.operation(), c.loads(), c.spall(),
                                      angles=np.linspace(s["start"], s["stop"], s["steps"]))
+        np.testing.assert_array_equal(codes[m], np.asarray(ref.result))
+        for n in np.flatnonzero(codes[m] == 8):
+            assert beyond_high_shoulder(c.bearing(), jax.tree_util.tree_map(lambda a: a[n], ref))
         np.testing.assert_allclose(st.solution.Q_outer[m], ref.Q_outer, rtol=1e-8, atol=1e-6)
         np.testing.assert_allclose(st.solution.alpha_inner[m], ref.alpha_inner, atol=1e-10)
         np.testing.assert_allclose(st.solution.cage_angle[m], ref.cage_angle, atol=0)
 
 
 def test_study_of_the_spall_runs_one_sweep_per_value():
-    st = workflows.study_case(study("defect.depth_mm", [0.0, 0.3]))
+    st = workflows.study_case(study("defect.depth_mm", [0.0, 0.3]), throw=False)
     assert not st.batched and st.unit == "mm"
+    codes = np.asarray(st.solution.result)
+    assert np.all(codes[0] == 0) and set(np.unique(codes[1])) <= {0, 8}   # 8: ball over the spall
     Qo = np.asarray(st.solution.Q_outer)
     assert Qo.shape == (2, 61, 16) and Qo[1].min() < Qo[0].min()     # the spall unloads a ball
 

@@ -17,10 +17,14 @@ psi)`` at constant speed); ``v_rel = v_s - [v_h, 0]``; ``C_b = diag(2 zeta_b sqr
 with K the quasi-static stiffness (contact damping); ``F_u = m_u e omega^2 [cos phi, sin phi,
 0]`` an optional unbalance turning with the shaft.
 
-Initial state: the model's own equilibrium at t = 0 by Newton from the quasi-static displacement
-with the quasi-static stiffness as the Jacobian (no derivative of the ball solve is compiled: the
-lean loads differ from the exact ones by <= 1e-3, so the iteration contracts by that factor per
-step).  Linear modes: the eigenvalues of the linearisation, assembled on the host from the same
+Initial state: the model's own equilibrium at t = 0 by a quasi-Newton iteration from the
+quasi-static displacement: the quasi-static stiffness as the first Jacobian, corrected by Broyden's
+update at every step (no derivative of the ball solve is compiled).  The lean loads differ from the
+exact ones by <= 1e-3 of the largest ball load, but the lean Jacobian can differ by far more: a
+deep-groove bearing under a small axial load (10-25 N against 500-1000 N radial, issue 27) carries
+it as the small difference of its contacts' axial components, and the lean axial stiffness was
+10-80 % off the quasi-static one, so a plain chord iteration contracted by only 0.1-0.8 per step
+(or stalled) and 6 steps left 1e-6 to 3 N.  Linear modes: the eigenvalues of the linearisation, assembled on the host from the same
 stiffness, the masses and the damping.
 """
 from __future__ import annotations
@@ -43,8 +47,9 @@ __all__ = ["DynamicModel", "build_model", "contact_damping", "damping_matrix", "
 
 #: |lambda| h bound of substeps="auto"
 STEP_RHO = 0.5
-#: Newton steps of the initial equilibrium (contraction ~1e-3 per step)
-_INIT_STEPS = 6
+#: quasi-Newton (Broyden) steps of the initial equilibrium: superlinear once the Jacobian is
+#: corrected; 8-11 steps on the hardest items measured (issue 27), each one lean ball solve
+_INIT_STEPS = 16
 
 
 class DynamicModel(eqx.Module):
@@ -169,8 +174,9 @@ def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, cu
 
 
 def initial_state(model: DynamicModel, q_rel0, stage0):
-    """Equilibrium of the lean model at t = 0 from the quasi-static displacement (Newton on the
-    3 translations, the quasi-static stiffness as Jacobian): (y0, converged, dy/dt at y0, the
+    """Equilibrium of the lean model at t = 0 from the quasi-static displacement (quasi-Newton on
+    the 3 translations: the quasi-static stiffness as the first Jacobian, Broyden's update after
+    every step): (y0, converged, dy/dt at y0, the
     balls' record (RECORD_ROWS, Z) there, see :meth:`DynamicModel.ring_load`).
 
     The housing sits at its static support deflection and everything is at rest, so dy/dt at
@@ -180,20 +186,29 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     J = model.stiffness
     J = J + 1e-12 * jnp.max(jnp.abs(J)) * jnp.eye(3)
 
+    scale = jnp.max(jnp.abs(F)) + 1.0
+    tol = 1e-9 * scale
+
     def newton(_, c):
-        x = c[0] + c[2]                           # the previous iterate's step
+        x0, r0, dx, J, _ = c
+        x = x0 + dx                               # the previous iterate's step
         R, rec = model.ring_load(x, stage0, full_state=True)
         r = R - F
-        dx = -jnp.linalg.solve(J, r)
-        return x, r, jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0), rec
+        # Broyden's (good) update with the step just taken; none before the first step, nor once
+        # converged (a step at round-off level would fill J with noise)
+        dd = jnp.dot(dx, dx)
+        upd = (dd > 0.0) & (jnp.max(jnp.abs(r0)) > tol)
+        Jn = J + jnp.outer(r - r0 - J @ dx, dx) / jnp.where(dd > 0.0, dd, 1.0)
+        J = jnp.where(upd & jnp.all(jnp.isfinite(Jn)), Jn, J)
+        step = -jnp.linalg.solve(J, r)
+        return x, r, jnp.where(jnp.all(jnp.isfinite(step)), step, 0.0), J, rec
 
     # the balls' record rides along (it is the last evaluation's, at the returned x): one ball
     # solve in the program instead of a second one after the loop
     Z = model.bearing.n_balls
-    x, r, _, rec = lax.fori_loop(0, _INIT_STEPS, newton,
-                                 (q_rel0, jnp.zeros(3), jnp.zeros(3), jnp.zeros((RECORD_ROWS, Z))))
-    scale = jnp.max(jnp.abs(F)) + 1.0
-    ok = jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r)) & (jnp.max(jnp.abs(r)) <= 1e-9 * scale)
+    x, r, _, _, rec = lax.fori_loop(0, _INIT_STEPS, newton,
+                                    (q_rel0, jnp.zeros(3), jnp.zeros(3), J, jnp.zeros((RECORD_ROWS, Z))))
+    ok = jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r)) & (jnp.max(jnp.abs(r)) <= tol)
     p = model.params
     xh = model.loads[:2] / p.housing_stiffness
     y0 = jnp.concatenate([x[:2] + xh, x[2:3], xh, jnp.zeros(5)])

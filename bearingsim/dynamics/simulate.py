@@ -19,7 +19,7 @@ from .. import sensor as sensor_mod
 from ..defect import Spall, as_defects
 from ..errors import InputError
 from ..hertz import stiffness_curve
-from ..jones import solve
+from ..jones import result_hint, solve
 from ..kinematics import Operation, defect_frequencies
 from ..passes import pass_variation
 from ..pit import pit_unbridged_fraction
@@ -299,8 +299,9 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         y, ah, sens, nsteps = np.zeros((T, 10)), np.zeros((T, 2)), np.zeros(T), 0
     if throw and code != RESULTS.successful:
         q_code = int(sol.result)
-        extra = f" (quasi-static: {sol.message()[0]})" if q_code else ""
-        raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", code.hint, code)
+        extra = f" (quasi-static: {sol.message()[0]}, result {q_code})" if q_code else ""
+        hint = result_hint(q_code, loads, bearing=bearing) if q_code else code.hint
+        raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", hint, code)
     noise = np.zeros(T)
     if realism.noise_rms > 0.0:
         noise = sensor_mod.measurement_noise(seed_streams(seed)[3], T, realism.noise_rms, fs, realism.noise_band)
