@@ -10,6 +10,7 @@ exactly afterwards.  One concept per module:
 ``model``              the shaft/housing equations, their equilibrium at t = 0, linear modes
 ``integrate``          fixed-step chunked time loop (and the adaptive diffrax reference)
 ``simulate``           one simulation: :func:`simulate`, :class:`DynamicsResult`
+``program``            a data set chunk as compiled device programs: :func:`chunk_program`
 ``batch``              items in lockstep: :func:`simulate_batch` (one program for all classes)
 =====================  ==========================================================================
 """
@@ -17,8 +18,9 @@ exactly afterwards.  One concept per module:
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 # ------------------------------------------------------------------------------ motion
-from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase, draw_motion,
-                     motion_at, motion_labels, seed_streams)
+from .motion import (DeviceMotion, Motion, crossings_device, defect_edge_times, defect_pass_times, defect_phase,
+                     defect_times_device, device_motion_of, draw_motion, draw_motion_device, knot_count, motion_at,
+                     motion_at_device, motion_labels, motion_ok_device, pass_count, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
 from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, BallCarry, ball_errors,
@@ -34,6 +36,7 @@ from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
 # ------------------------------------------------------------------------- entry points
 from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
                        simulate_case, spin_ratio, unbridged_of, vary_sensor)
+from .program import MENU, ChunkProgram, chunk_program, iterations_needed, menu_iterations
 from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
                     simulate_batch)
 
@@ -54,4 +57,7 @@ __all__ = [
     "load_zone_centre", "unbridged_of", "vary_sensor",
     "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
     "simulate_batch",
+    "DeviceMotion", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of", "knot_count",
+    "crossings_device", "defect_times_device", "pass_count",
+    "MENU", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
 ]
