@@ -31,7 +31,7 @@ from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, B
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
 
 # --------------------------------------------------------------------------- integration
-from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
+from .integrate import CHUNK, SCHEMES, jumps_device, run_adaptive, run_fixed, stage_grid, stages_device, time_grid
 
 # ------------------------------------------------------------------------- entry points
 from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
@@ -52,7 +52,7 @@ __all__ = [
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
     "CHORD_TOL", "BallCarry", "initial_ball_carry", "bearing_force_chord",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
-    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
+    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "stages_device", "jumps_device",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
     "load_zone_centre", "unbridged_of", "vary_sensor",
     "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
