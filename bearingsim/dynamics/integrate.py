@@ -36,7 +36,7 @@ from ..errors import InputError
 from ..xla import compiler_options, jit
 from .ball_force import initial_ball_carry
 from .model import DynamicModel
-from .motion import Motion, motion_at, motion_at_device
+from .motion import Motion, device_motion_of, motion_at, motion_at_device
 
 __all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive",
            "stage_grid", "stages_device", "jumps_device", "advance_record"]
@@ -128,6 +128,23 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
 
 
 _advance_jit = jit(_advance)
+
+
+def _advance_device(model, carry, m, edges, k0, h, flt, scheme, substeps, fs, record, chord):
+    """:func:`_advance` over samples k0..k0+CHUNK-1 with the stage and jump arrays built in the
+    program from the :class:`DeviceMotion` ``m`` and the padded edge times (no host arrays per
+    chunk)."""
+    Z = model.bearing.n_balls
+    stages = stages_device(m, Z, k0, CHUNK, fs, scheme, substeps)
+    jumps = jumps_device(edges, k0, CHUNK, substeps, h)
+    return _advance(model, carry, stages, jumps, h, flt, scheme, record, chord)
+
+
+_advance_device_jit = jit(_advance_device)
+
+
+def _pad_to(n, block=256):
+    return block * (n // block + 1)
 
 
 def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
@@ -234,20 +251,29 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
+    if not batch:       # one model: the stages and jumps are built on the device, chunk by chunk
+        md = device_motion_of(motions, _pad_to(np.size(motions.knots_u)))
+        e = np.asarray(edges, float)
+        edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):
-        stg = np.stack([_chunk_stages(m, grid, k0, CHUNK, fs) for m in ms])
-        jmp = np.stack([_chunk_jumps(e, k0, CHUNK, substeps, h) for e in es])
+        n = min(CHUNK, T - k0)
         if batch:
+            stg = np.stack([_chunk_stages(m, grid, k0, CHUNK, fs) for m in ms])
+            jmp = np.stack([_chunk_jumps(e, k0, CHUNK, substeps, h) for e in es])
             carry, out = _advance_batch_jit(model, carry, jnp.asarray(stg), jnp.asarray(jmp),
                                             jnp.full(len(ms), h), flt, scheme)
+            outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n], out))
         else:
-            carry, out = _advance_jit(model, carry, jnp.asarray(stg[0]), jnp.asarray(jmp[0]),
-                                      jnp.float64(h), flt, scheme, record, chord)
-        n = min(CHUNK, T - k0)
-        # the sample axis is the first of an item's outputs
-        outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n] if batch else np.asarray(a)[:n], out))
+            carry, out = _advance_device_jit(model, carry, md, edges_dev, jnp.float64(k0), jnp.float64(h), flt,
+                                             scheme, int(substeps), float(fs), record, chord)
+            outs.append(out)            # stays on the device until the end (no round trip per chunk)
+            if bar is not None:
+                jax.block_until_ready(carry[0])
         if bar is not None:
             bar.update(n)
+    if not batch:
+        outs = [jax.tree_util.tree_map(lambda a: np.asarray(a), jax.tree_util.tree_map(
+            lambda *a: jnp.concatenate(a, axis=0)[:T], *outs))]
     if bar is not None:
         bar.close()
     y = np.concatenate([o[0] for o in outs], axis=-2)

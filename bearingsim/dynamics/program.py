@@ -87,27 +87,31 @@ def _check_angles(bearing, loc, theta0, center, extent, k):
     return jnp.concatenate([base, ang]), jnp.concatenate([jnp.zeros(12), phi])
 
 
-def _prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile, slots, control,
-             hertz_method):
+def _states(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile, slots, control,
+            hertz_method, speed_steps):
     n = speed_rpm.shape[0]
     one = jnp.ones(n)
     op = Operation(2 * np.pi * speed_rpm / 60.0, control, one, one)
     defects = _slots(loc, center, extent, depth, profile, slots)
+    sols = jax.vmap(lambda o, F, th, sp: solve_state(bearing, o, F, cage_angle=th, spall=sp, speed_steps=speed_steps,
+                                                     curve=curve, hertz_method=hertz_method))(op, loads, theta0, defects)
+    return op, defects, sols
 
-    def qs(o, F, th, sp, steps):
-        return solve_state(bearing, o, F, cage_angle=th, spall=sp, speed_steps=steps, curve=curve,
-                           hertz_method=hertz_method)
 
-    sols = jax.vmap(lambda o, F, th, sp: qs(o, F, th, sp, 1))(op, loads, theta0, defects)
-    bad = sols.result != 0
+_states_jit = jit(_states)
 
-    def retry(s):          # the failed items again with 8 speed stages (a real branch: not vmapped)
-        r = jax.vmap(lambda o, F, th, sp: qs(o, F, th, sp, 8))(op, loads, theta0, defects)
-        take = bad & (r.result == 0)
-        return jax.tree_util.tree_map(lambda a, b: jnp.where(take.reshape(take.shape + (1,) * (a.ndim - 1)), b, a),
-                                      s, r)
 
-    sols = lax.cond(jnp.any(bad), retry, lambda s: s, sols)
+def _merge(sols, retry):
+    take = (sols.result != 0) & (retry.result == 0)
+    return jax.tree_util.tree_map(lambda a, b: jnp.where(take.reshape(take.shape + (1,) * (a.ndim - 1)), b, a),
+                                  sols, retry)
+
+
+_merge_jit = jit(_merge)
+
+
+def _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, depth):
+    n = op.speed.shape[0]
     freqs, a_m, k = jax.vmap(lambda w, s: frequencies_device(bearing, w, s))(op.speed, sols)
 
     # the ball solver's error per Newton step count (choose_ball_iterations, per item)
@@ -126,6 +130,16 @@ def _prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, dept
 
 
 _prepare_jit = jit(_prepare)
+
+
+def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile, slots, control,
+                    hertz_method):
+    op, defects, sols = _states(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile,
+                                slots, control, hertz_method, 1)
+    return _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, depth)
+
+
+_states_prepare_jit = jit(_states_prepare)
 
 
 def iterations_needed(errors, valid, tol=ITER_TOL):
@@ -219,9 +233,19 @@ class ChunkProgram:
         self.calls = 0          # device programs launched (a test counts them)
 
     def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth):
+        """The items' quasi-static states and the ball solver's check (device arrays).  Items
+        whose state failed are solved again with 8 speed stages, all of them in a second
+        program that runs (and compiles) only when a chunk has one: the host reads one bool."""
+        args = (self.bearing, self.curve, speed_rpm, loads, theta0, location, center, extent, depth, self.profile,
+                self.slots, self.control, self.hertz_method)
+        prep = _states_prepare_jit(*args)
         self.calls += 1
-        return _prepare_jit(self.bearing, self.curve, speed_rpm, loads, theta0, location, center, extent, depth,
-                            self.profile, self.slots, self.control, self.hertz_method)
+        if bool(jax.device_get(jnp.any(prep["sols"].result != 0))):      # rare: the second pass
+            sols = _merge_jit(prep["sols"], _states_jit(*args, 8)[2])
+            prep = _prepare_jit(self.bearing, self.curve, prep["op"], prep["defects"], sols, theta0, location, center,
+                                extent, depth)
+            self.calls += 3
+        return prep
 
     def run(self, prep, keys, loads, theta0, modes, params, iterations):
         self.calls += 1
