@@ -252,7 +252,7 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
         from tqdm import tqdm
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
     if not batch:       # one model: the stages and jumps are built on the device, chunk by chunk
-        md = device_motion_of(motions, _pad_to(np.size(motions.knots_u)))
+        md = device_motion_of(motions, T / fs, 256)
         e = np.asarray(edges, float)
         edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):

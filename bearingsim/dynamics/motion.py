@@ -130,11 +130,18 @@ def _progress(m: Motion, t, xp):
     return m.Z / (2 * np.pi) * (m.theta0 + m.omega_c * (t + m.fluct * S))
 
 
+def _no_slip(m: Motion):
+    return np.size(m.knots_u) == 2 and float(m.knots_u[0]) == -1e12
+
+
 def motion_at(m: Motion, t, xp=np):
     """(cage angle, shaft angle, shaft speed) at times t (``xp``: numpy or jax.numpy)."""
     s, S = _fluct(m, t, xp)
     u = m.Z / (2 * np.pi) * (m.theta0 + m.omega_c * (t + m.fluct * S))
-    p = xp.interp(u, xp.asarray(m.knots_u), xp.asarray(m.knots_p))
+    if _no_slip(m):         # the identity (interpolating between the +-1e12 sentinels would round u to 1e-4)
+        p = u
+    else:
+        p = xp.interp(u, xp.asarray(m.knots_u), xp.asarray(m.knots_p))
     return 2 * np.pi / m.Z * p, m.omega0 * (t + m.fluct * S), m.omega0 * (1.0 + m.fluct * s)
 
 
@@ -316,16 +323,21 @@ def motion_ok_device(m: DeviceMotion, Z, duration):
     return (m.knots_u[0] <= jnp.min(u) - 1.0) & (m.knots_u[-1] >= jnp.max(u) + 1.0)
 
 
-def device_motion_of(m: Motion, n_knots=None):
+def device_motion_of(m: Motion, duration=None, block=None):
     """A host :class:`Motion` (:func:`draw_motion`) as a :class:`DeviceMotion` (the same motion:
-    for comparing the device path with the host path on identical draws).  Its knots are padded
-    to ``n_knots`` by whole pitches beyond the last (default: as many as it has)."""
+    for comparing the device path with the host path on identical draws, and for one simulation's
+    time loop).  A run without slip gets exact whole-pitch knots over ``duration`` (s; required
+    then).  The knots are padded by whole pitches beyond the last to a multiple of ``block``
+    (default: none), so that runs of similar length share one program."""
     import jax.numpy as jnp
 
     ku, kp = np.asarray(m.knots_u, float), np.asarray(m.knots_p, float)
-    if m.slip_draws.size == 0 and ku.size == 2:       # no slip: the identity over any range
-        ku = kp = np.array([-1e12, 1e12])
-    n = ku.size if n_knots is None else int(n_knots)
+    if _no_slip(m):
+        if duration is None:
+            raise ValueError("device_motion_of: a run without slip needs its duration")
+        u = _progress(m, np.linspace(0.0, float(duration), 257), np)
+        ku = kp = np.arange(np.floor(u.min()) - 4.0, np.ceil(u.max()) + 5.0)
+    n = ku.size if block is None else int(block) * (ku.size // int(block) + 1)
     if n > ku.size:
         extra = np.arange(1, n - ku.size + 1, dtype=float)
         ku, kp = np.concatenate([ku, ku[-1] + extra]), np.concatenate([kp, kp[-1] + extra])

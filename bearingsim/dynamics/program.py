@@ -125,8 +125,10 @@ def _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, dep
         return ball_errors(bearing, o, q, sp, curve, ang, jnp.array([0.95, 1.0, 1.05]), phi, kk)
 
     err = jax.vmap(errs)(op, sols.displacement, defects, theta0, center, extent, k, code)
+    needed = iterations_needed(err, sols.result == 0)
     return dict(op=op, defects=defects, sols=sols, freqs=freqs, contact_angle=a_m, spin_ratio=k,
-                ball_errors=err, needed=iterations_needed(err, sols.result == 0))
+                ball_errors=err, needed=needed, chunk_needed=jnp.max(jnp.where(needed == 0, MENU[-1], needed)),
+                failed=jnp.any(sols.result != 0))
 
 
 _prepare_jit = jit(_prepare)
@@ -240,7 +242,7 @@ class ChunkProgram:
                 self.slots, self.control, self.hertz_method)
         prep = _states_prepare_jit(*args)
         self.calls += 1
-        if bool(jax.device_get(jnp.any(prep["sols"].result != 0))):      # rare: the second pass
+        if bool(jax.device_get(prep["failed"])):      # rare: the second pass
             sols = _merge_jit(prep["sols"], _states_jit(*args, 8)[2])
             prep = _prepare_jit(self.bearing, self.curve, prep["op"], prep["defects"], sols, theta0, location, center,
                                 extent, depth)
@@ -271,8 +273,7 @@ class ChunkProgram:
         ``spin_ratio``, ``ball_error`` (N,) and ``ball_iterations`` (the host int used)."""
         prep = self.prepare(speed_rpm, loads, theta0, location, center, extent, depth)
         if iterations is None:
-            need = jnp.max(jnp.where(prep["needed"] == 0, MENU[-1], prep["needed"]))
-            iterations = menu_iterations([int(jax.device_get(need))])
+            iterations = menu_iterations([int(jax.device_get(prep["chunk_needed"]))])
         out = self.run(prep, keys, loads, theta0, modes, params, iterations)
         out["ball_iterations"] = int(iterations)
         return out
