@@ -131,3 +131,34 @@ def test_menu():
     assert dyn.menu_iterations([2]) == 2
     assert dyn.menu_iterations([1, 0]) == dyn.MENU[-1]          # no count suffices: the largest
     assert dyn.menu_iterations([8, 16]) == 16
+
+
+def test_pit_depths_inside_the_program(setup, program_run):
+    """depth_rule "pit": the program's effective depth and unbridged fraction of each fault
+    item equal bearingsim.pit's NumPy functions on its healthy state with ball 0 at the pit
+    (outer) or at azimuth 0 (inner, ball), solved on the host (1e-7: the Simpson weights, see
+    tests/test_pit_device.py); healthy items get 0."""
+    from bearingsim.jones import solve
+    from bearingsim.pit import pit_depth_of_solution, pit_unbridged_fraction
+
+    s = setup
+    prog, args, _ = program_run
+    n = s["n"]
+    w = np.array([0.5334e-3, 0.1778e-3, 1.016e-3, 0.5e-3])
+    machined = np.full(n, 0.2794e-3)
+    prep = prog.prepare(*args[1:8], pit=(jnp.asarray(w), jnp.asarray(machined)))
+    got_d, got_u = np.asarray(prep["pit_depth"]), np.asarray(prep["unbridged"])
+    assert np.all(np.asarray(prep["pit_ok"]))
+    for i in range(n):
+        if s["depth"][i] == 0:
+            assert got_d[i] == 0 and got_u[i] == 0
+            continue
+        op = Operation.from_rpm(float(s["speed"][i]), "outer", True, True)
+        th = float(s["center"][i]) if s["loc"][i] == "outer" else 0.0
+        sol = jax.tree_util.tree_map(np.asarray, solve(s["b"], op, jnp.asarray(s["loads"][i]), cage_angle=th))
+        d = pit_depth_of_solution(sol, s["b"], 0, s["loc"][i], w[i], machined[i]).depth
+        u = pit_unbridged_fraction(sol, s["b"], 0, s["loc"][i], w[i])
+        assert got_d[i] == pytest.approx(d, rel=1e-7)
+        assert got_u[i] == pytest.approx(u, rel=1e-9, abs=1e-12)
+    # the defective states are solved with these depths
+    assert np.all(np.asarray(prep["depth"]) == got_d)

@@ -34,6 +34,7 @@ from ..defect import LOCATIONS, Spall
 from ..hertz import stiffness_curve
 from ..jones import solve_state
 from ..kinematics import Operation, defect_frequencies
+from ..pit import pit_of_solution_device
 from ..xla import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
 from .integrate import advance_record, check_scheme, jumps_device, stages_device
@@ -135,10 +136,38 @@ _prepare_jit = jit(_prepare)
 
 
 def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile, slots, control,
-                    hertz_method):
-    op, defects, sols = _states(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile,
-                                slots, control, hertz_method, 1)
-    return _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, depth)
+                    hertz_method, pit=None):
+    """The items' states and the ball check.  ``pit`` (pit diameter, machined depth) (N,) each,
+    or None: ``depth`` is then each fault item's effective pit depth
+    (:func:`bearingsim.pit.pit_of_solution_device`) from its healthy state with ball 0 at the pit
+    (an outer pit) or at azimuth 0 (an inner or ball pit), solved first in the same program:
+    the two solves are one ``lax.scan`` of two passes, so the solve is traced once."""
+    if pit is None:
+        op, defects, sols = _states(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile,
+                                    slots, control, hertz_method, 1)
+        out = _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, depth)
+        out.update(depth=depth, pit_depth=depth, unbridged=jnp.zeros_like(depth), pit_ok=jnp.ones(depth.shape, bool))
+        return out
+    w, machined = pit
+    fault = depth > 0
+    th_pit = jnp.where(loc == LOCATIONS.index("outer"), center, 0.0)
+
+    def one_pass(carry, _):
+        d, th = carry
+        op, defects, sols = _states(bearing, curve, speed_rpm, loads, th, loc, center, extent, d, profile, slots,
+                                    control, hertz_method, 1)
+        dp, u = jax.vmap(lambda s_, L, ww, mm: pit_of_solution_device(s_, bearing, 0, L, ww, mm))(sols, loc, w, machined)
+        ok = sols.result == 0
+        dp = jnp.where(fault & ok, dp, 0.0)
+        return (dp, theta0), (op, defects, sols, dp, jnp.where(fault & ok, u, 0.0), ok | ~fault)
+
+    _, (op, defects, sols, dp, u, ok) = lax.scan(one_pass, (jnp.zeros_like(depth), th_pit), None, length=2)
+    take = lambda tree, k: jax.tree_util.tree_map(lambda a: a[k], tree)  # noqa: E731
+    op, defects, sols = take(op, 1), take(defects, 1), take(sols, 1)
+    d_eff = dp[0]
+    out = _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, d_eff)
+    out.update(depth=d_eff, pit_depth=d_eff, unbridged=u[0], pit_ok=ok[0])
+    return out
 
 
 _states_prepare_jit = jit(_states_prepare)
@@ -169,7 +198,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
     params = eqx.tree_at(lambda q: (q.resonance_frequency, q.resonance_damping_ratio, q.resonance_gain), params,
                          (f_m, z_m, g_m))
 
-    def one(key, o, F, sp, sol, p, k, th, fm, zm, gm, needed):
+    def one(key, o, F, sp, sol, p, k, th, fm, zm, gm, needed, pit_ok):
         model = build_model(bearing, o, F, sp, sol, p, curve, iterations, k)
         wc = jnp.where(jnp.isfinite(sol.cage_speed) & (sol.cage_speed > 0), sol.cage_speed, 0.0)
         centre = next((s.center for s in sp if s.location == "outer"), 0.0)
@@ -188,7 +217,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         jumps = jumps_device(edges, 0, T, substeps, h)
         carry = (y0, dy0, jnp.zeros(fm.shape + (2,)))
         _, (ah, sens) = advance_record(model, carry, stages, jumps, h, flt, scheme, lean=True)
-        code = jnp.where(sol.result != 0, RESULTS.initial_state.value,
+        code = jnp.where((sol.result != 0) | ~pit_ok, RESULTS.initial_state.value,
                          jnp.where(~ok, RESULTS.initial_equilibrium.value, 0))
         fits = motion_ok_device(m, Z, T / fs) & e_ok & p_ok
         code = jnp.where((code == 0) & ~fits, RESULTS.fixed_size.value, code)
@@ -203,9 +232,11 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
                     speed_fluctuation_frequencies_Hz=m.fluct_freqs, cage_speed=jnp.where(good, wc, jnp.nan))
 
     out = jax.vmap(one)(keys, op, loads, defects, sols, params, prep["spin_ratio"], theta0, f_m, z_m, g_m,
-                        prep["needed"])
+                        prep["needed"], prep["pit_ok"])
     out.update({k: v for k, v in prep["freqs"].items()})
     out["contact_angle"] = prep["contact_angle"]
+    for k_ in ("pit_depth", "unbridged", "pit_ok"):
+        out[k_] = prep[k_]
     out["spin_ratio"] = prep["spin_ratio"]
     out["ball_error"] = jnp.take_along_axis(prep["ball_errors"], jnp.full((keys.shape[0], 1),
                                             ITER_CHOICES.index(iterations)), axis=1)[:, 0]
@@ -234,18 +265,21 @@ class ChunkProgram:
         self.P = pass_count(shaft, dur, bearing, a, sigma)
         self.calls = 0          # device programs launched (a test counts them)
 
-    def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth):
+    def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth, pit=None):
         """The items' quasi-static states and the ball solver's check (device arrays).  Items
         whose state failed are solved again with 8 speed stages, all of them in a second
         program that runs (and compiles) only when a chunk has one: the host reads one bool."""
         args = (self.bearing, self.curve, speed_rpm, loads, theta0, location, center, extent, depth, self.profile,
                 self.slots, self.control, self.hertz_method)
-        prep = _states_prepare_jit(*args)
+        prep = _states_prepare_jit(*args, pit)
+        args = args[:8] + (prep["depth"],) + args[9:]
         self.calls += 1
         if bool(jax.device_get(prep["failed"])):      # rare: the second pass
             sols = _merge_jit(prep["sols"], _states_jit(*args, 8)[2])
+            keep = {k: prep[k] for k in ("depth", "pit_depth", "unbridged", "pit_ok")}
             prep = _prepare_jit(self.bearing, self.curve, prep["op"], prep["defects"], sols, theta0, location, center,
-                                extent, depth)
+                                extent, keep["depth"])
+            prep.update(keep)
             self.calls += 3
         return prep
 
@@ -256,7 +290,7 @@ class ChunkProgram:
                         self.profile)
 
     def __call__(self, keys, speed_rpm, loads, theta0, location, center, extent, depth, modes, params,
-                 iterations=None):
+                 iterations=None, pit=None):
         """Simulate one chunk: ``keys`` (N, 2) uint32 (``jax.random`` keys, one per item),
         ``speed_rpm`` (N,), ``loads`` (N, 5) N / N m, ``theta0`` (N,) cage angle at t = 0 (rad),
         ``location`` (N,) int (index in :data:`bearingsim.defect.LOCATIONS`), ``center``,
@@ -270,8 +304,13 @@ class ChunkProgram:
         items: zero signals), ``pass_times`` (N, P) s ascending, +inf padded,
         ``pass_jitter_percent``, ``speed_fluctuation_frequencies_Hz`` (N, K), ``cage_speed``,
         ``shaft_Hz``, ``ftf_Hz``, ``bpfo_Hz``, ``bpfi_Hz``, ``bsf_Hz``, ``contact_angle``,
-        ``spin_ratio``, ``ball_error`` (N,) and ``ball_iterations`` (the host int used)."""
-        prep = self.prepare(speed_rpm, loads, theta0, location, center, extent, depth)
+        ``spin_ratio``, ``ball_error`` (N,), ``pit_depth`` (m; the depth simulated),
+        ``unbridged`` and ``pit_ok`` (N,) and ``ball_iterations`` (the host int used).
+        ``pit``: None, or (pit diameter, machined depth) (N,) m each for ``depth_rule = "pit"``:
+        every fault item's depth is then its pit's effective depth at its own healthy contact,
+        computed in the same program (``depth`` only marks the fault items: > 0); an item whose
+        healthy state failed has ``pit_ok`` False and result ``initial_state``."""
+        prep = self.prepare(speed_rpm, loads, theta0, location, center, extent, depth, pit)
         if iterations is None:
             iterations = menu_iterations([int(jax.device_get(prep["chunk_needed"]))])
         out = self.run(prep, keys, loads, theta0, modes, params, iterations)
