@@ -271,9 +271,8 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
                 jax.block_until_ready(carry[0])
         if bar is not None:
             bar.update(n)
-    if not batch:
-        outs = [jax.tree_util.tree_map(lambda a: np.asarray(a), jax.tree_util.tree_map(
-            lambda *a: jnp.concatenate(a, axis=0)[:T], *outs))]
+    if not batch:           # fetched once, joined on the host (no device ops to compile)
+        outs = [jax.tree_util.tree_map(lambda *a: np.concatenate([np.asarray(x) for x in a], axis=0)[:T], *outs)]
     if bar is not None:
         bar.close()
     y = np.concatenate([o[0] for o in outs], axis=-2)

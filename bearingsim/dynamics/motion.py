@@ -131,7 +131,13 @@ def _progress(m: Motion, t, xp):
 
 
 def _no_slip(m: Motion):
-    return np.size(m.knots_u) == 2 and float(m.knots_u[0]) == -1e12
+    """True for a run drawn without slip (its two sentinel knots at +-1e12)."""
+    if np.size(m.knots_u) != 2:
+        return False
+    try:
+        return float(np.asarray(m.knots_u)[0]) == -1e12
+    except Exception:       # noqa: BLE001 -- traced knots: a drawn walk
+        return False
 
 
 def motion_at(m: Motion, t, xp=np):
