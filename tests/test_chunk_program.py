@@ -41,7 +41,7 @@ def program_inputs(s):
     pb = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,)) if a.ndim == 0 else a, p)
     modes = tuple(jnp.asarray(np.tile(m, (n, 1))) for m in MODES)
     li = jnp.asarray([LOCATIONS.index(L) for L in s["loc"]])
-    keys = jax.random.key_data(jax.random.split(jax.random.key(7), n))
+    keys = dyn.item_keys(7, np.arange(n))
     return (keys, jnp.asarray(s["speed"]), jnp.asarray(s["loads"]), jnp.zeros(n), li, jnp.asarray(s["center"]),
             jnp.asarray(s["extent"]), jnp.asarray(s["depth"]), modes, pb)
 
@@ -162,3 +162,11 @@ def test_pit_depths_inside_the_program(setup, program_run):
         assert got_u[i] == pytest.approx(u, rel=1e-9, abs=1e-12)
     # the defective states are solved with these depths
     assert np.all(np.asarray(prep["depth"]) == got_d)
+
+
+def test_item_keys_depend_on_seed_and_index_only():
+    k = np.asarray(dyn.item_keys(3, np.arange(10)))
+    assert k.shape == (10, 2) and k.dtype == np.uint32
+    np.testing.assert_array_equal(np.asarray(dyn.item_keys(3, [5, 6])), k[5:7])
+    assert len({tuple(r) for r in k}) == 10
+    assert not np.array_equal(np.asarray(dyn.item_keys(4, np.arange(10))), k)

@@ -36,7 +36,7 @@ from .integrate import CHUNK, SCHEMES, jumps_device, run_adaptive, run_fixed, st
 # ------------------------------------------------------------------------- entry points
 from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
                        simulate_case, spin_ratio, unbridged_of, vary_sensor)
-from .program import MENU, ChunkProgram, chunk_program, iterations_needed, menu_iterations
+from .program import MENU, MOTION_STREAM, ChunkProgram, chunk_program, item_keys, iterations_needed, menu_iterations
 from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
                     simulate_batch)
 
@@ -59,5 +59,5 @@ __all__ = [
     "simulate_batch",
     "DeviceMotion", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of", "knot_count",
     "crossings_device", "defect_times_device", "pass_count",
-    "MENU", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
+    "MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
 ]

@@ -43,11 +43,23 @@ from .motion import (defect_times_device, draw_motion_device, knot_count, motion
                      motion_ok_device, pass_count)
 from .parameters import RESULTS, Realism
 
-__all__ = ["MENU", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
+__all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
            "frequencies_device"]
 
 #: the Newton step counts a chunk's time loop is compiled with (one program each, when first used)
 MENU = (1, 2, 4, 8, 16)
+#: the item key's stream the motion is drawn from (``jax.random.fold_in(key, MOTION_STREAM)``);
+#: the signal stage folds in other numbers (>= 2) for its own draws
+MOTION_STREAM = 1
+
+
+def item_keys(seed, index):
+    """The items' ``jax.random`` keys as raw (N, 2) uint32 data: ``fold_in(key(seed), index)``,
+    so an item's key (and every draw from it) depends only on (seed, index), not on the chunk
+    it falls in."""
+    base = jax.random.PRNGKey(int(seed))
+    idx = jnp.asarray(index, jnp.uint32)
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(idx)
 
 
 def frequencies_device(bearing, speed, sol):
@@ -202,7 +214,8 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         model = build_model(bearing, o, F, sp, sol, p, curve, iterations, k)
         wc = jnp.where(jnp.isfinite(sol.cage_speed) & (sol.cage_speed > 0), sol.cage_speed, 0.0)
         centre = next((s.center for s in sp if s.location == "outer"), 0.0)
-        m = draw_motion_device(key, Z, th, wc, o.speed, (T - 1) / fs, centre, realism, n_knots)
+        m = draw_motion_device(jax.random.fold_in(key, MOTION_STREAM), Z, th, wc, o.speed, (T - 1) / fs, centre, realism,
+                               n_knots)
         st0 = jnp.stack(motion_at_device(m, Z, jnp.zeros(())), -1)
         y0, ok, dy0, _ = initial_state(model, sol.displacement[:3], st0)
         if profile == "rectangular":
