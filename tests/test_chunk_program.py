@@ -170,3 +170,29 @@ def test_item_keys_depend_on_seed_and_index_only():
     np.testing.assert_array_equal(np.asarray(dyn.item_keys(3, [5, 6])), k[5:7])
     assert len({tuple(r) for r in k}) == 10
     assert not np.array_equal(np.asarray(dyn.item_keys(4, np.arange(10))), k)
+
+
+def test_an_item_rerun_alone_from_its_key(setup):
+    """With slip and speed fluctuation on, simulate(..., key=item key, n_knots=program's) draws
+    the item's motion exactly as the chunk program does: the same pass times (1e-9 s) and the
+    same sensor signal (1e-6 of its RMS: both solve the balls in full with 4 Newton steps; the
+    paths differ by round-off, see test_same_physics_as_the_host_path)."""
+    s = setup
+    realism = dyn.Realism(slip_percent=0.9, speed_fluctuation_percent=0.1)
+    prog = dyn.chunk_program(s["b"], samples=T, sample_rate=FS, realism=realism, max_speed_rpm=1800.0)
+    args = program_inputs(s)
+    out = prog(*args, iterations=4)
+    i = 0
+    op = Operation.from_rpm(float(s["speed"][i]), "outer", True, True)
+    sp = Spall(float(s["center"][i]), float(s["extent"][i]), float(s["depth"][i]), "rectangular", "outer", 0)
+    p = dyn.DynamicsParameters(contact_damping_ratio=0.3, resonance_frequency=MODES[0],
+                               resonance_damping_ratio=MODES[1], resonance_gain=MODES[2])
+    r = dyn.simulate(s["b"], op, jnp.asarray(s["loads"][i]), sp, p, T / FS, FS, realism=realism, key=args[0][i],
+                     n_knots=prog.n_knots, ball_iterations=4, substeps=1, record_balls=False, progress=False,
+                     ball_solver="full")
+    tp = np.asarray(out["pass_times"][i])
+    np.testing.assert_allclose(tp[np.isfinite(tp)], r.pass_times, rtol=0, atol=1e-9)
+    a = np.asarray(out["sensor"][i])
+    rms = np.sqrt(np.mean(a ** 2))
+    assert r.realism["pass_jitter_percent"] == pytest.approx(float(out["pass_jitter_percent"][i]), rel=1e-12)
+    assert np.max(np.abs(a - r.sensor_acceleration)) < 1e-6 * rms

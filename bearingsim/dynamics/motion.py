@@ -38,8 +38,8 @@ from ..defect import as_defects
 from .parameters import Realism
 
 __all__ = ["Motion", "seed_streams", "draw_motion", "motion_at", "defect_phase", "defect_edge_times", "DeviceMotion",
-           "knot_count", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of",
-           "crossings_device", "pass_count", "defect_times_device", "motion_labels_device",
+           "knot_count", "MOTION_STREAM", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of",
+           "crossings_device", "pass_count", "defect_times_device", "motion_labels_device", "host_motion_of",
            "defect_pass_times", "motion_labels", "FLUCTUATION_TERMS"]
 
 #: sinusoids in the speed fluctuation
@@ -240,6 +240,10 @@ class DeviceMotion(NamedTuple):
     inside: jnp.ndarray         # (n_knots - 1,) bool
 
 
+#: the item key's stream the motion is drawn from (``jax.random.fold_in(key, MOTION_STREAM)``);
+#: the signal stage folds in other numbers (>= 2) for its own draws
+MOTION_STREAM = 1
+
 #: slip knots drawn before the run's start (progress never falls below its value at t = 0 by
 #: more than the fluctuation's excursion: 1 + 4 a < 2 pitches for a < 0.25)
 BACK_KNOTS = 8
@@ -416,6 +420,16 @@ def defect_times_device(m: DeviceMotion, Z, defects, spin_ratio, duration, count
     if not out:
         return jnp.full((1,), jnp.inf), ok
     return jnp.sort(jnp.concatenate(out)), ok
+
+
+def host_motion_of(m: DeviceMotion, Z, seed=0) -> Motion:
+    """A (single, concrete) :class:`DeviceMotion` as a host :class:`Motion`: the same cage and
+    shaft motion for :func:`motion_at`, :func:`defect_edge_times` and the labels (its knots are
+    finite, so :func:`motion_at` interpolates them; ``slip_draws`` those within the run)."""
+    g = lambda v: np.asarray(v, float)  # noqa: E731
+    eps = g(m.slip_draws)[np.asarray(m.inside, bool)]
+    return Motion(float(m.theta0), float(m.omega_c), float(m.omega0), int(Z), float(m.fluct), g(m.fluct_freqs),
+                  g(m.fluct_phases), g(m.knots_u), g(m.knots_p), eps, int(seed))
 
 
 def motion_labels_device(m: DeviceMotion):

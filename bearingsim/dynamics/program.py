@@ -39,7 +39,7 @@ from ..xla import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
 from .integrate import advance_record, check_scheme, jumps_device, stages_device
 from .model import build_model, initial_state
-from .motion import (defect_times_device, draw_motion_device, knot_count, motion_at_device, motion_labels_device,
+from .motion import (MOTION_STREAM, defect_times_device, draw_motion_device, knot_count, motion_at_device, motion_labels_device,
                      motion_ok_device, pass_count)
 from .parameters import RESULTS, Realism
 
@@ -48,9 +48,6 @@ __all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program"
 
 #: the Newton step counts a chunk's time loop is compiled with (one program each, when first used)
 MENU = (1, 2, 4, 8, 16)
-#: the item key's stream the motion is drawn from (``jax.random.fold_in(key, MOTION_STREAM)``);
-#: the signal stage folds in other numbers (>= 2) for its own draws
-MOTION_STREAM = 1
 
 
 def item_keys(seed, index):
