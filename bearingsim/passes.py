@@ -78,14 +78,29 @@ def vary_passes(x, fs, pass_times, factors, shifts=None, lead=0.15, taper=0.1) -
     T = float(np.mean(np.diff(tp))) if tp.size > 1 else max(t[-1], 1.0 / float(fs))
     edges = tp - lead * T
     w = taper * T
-    up = [np.zeros(x.size)] + [_ramp(t, e, w) for e in edges]       # 0, ramp_1, ..., ramp_K
-    out = np.zeros(x.size)
+    # piece k is nonzero only between its rising and its falling taper: each is evaluated there
+    # (one sample of zeros either side, so a delayed piece interpolates to zero exactly as over
+    # the whole record); the sum is the same, element by element, as over the whole record
+    n = x.size
+    K = edges.size
+    lo = np.searchsorted(t, edges - 0.5 * w, side="left")       # first sample a ramp may be > 0
+    hi = np.searchsorted(t, edges + 0.5 * w, side="right")      # first sample past the ramp
+    out = np.zeros(n)
     for k in range(factors.size):
-        win = (1.0 if k == 0 else up[k]) - (up[k + 1] if k + 1 < len(up) else 0.0)
-        piece = factors[k] * win * xc
+        a = 0 if k == 0 else max(int(lo[k - 1]) - 1, 0)
+        b = n if k == K else min(int(hi[k]) + 1, n)
+        if b <= a:
+            continue
+        ts = t[a:b]
+        win = (1.0 if k == 0 else _ramp(ts, edges[k - 1], w)) - (_ramp(ts, edges[k], w) if k < K else 0.0)
+        piece = factors[k] * win * xc[a:b]
         if shifts[k] != 0.0:
-            piece = np.interp(t - shifts[k], t, piece, left=0.0, right=0.0)
-        out += piece
+            j0 = int(np.searchsorted(t, ts[0] + shifts[k], side="left"))
+            j1 = int(np.searchsorted(t, ts[-1] + shifts[k], side="right"))
+            if j1 > j0:
+                out[j0:j1] += np.interp(t[j0:j1] - shifts[k], ts, piece, left=0.0, right=0.0)
+        else:
+            out[a:b] += piece
     return out + m
 
 

@@ -21,7 +21,8 @@ import numpy as np
 
 __all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
            "pit_depth", "pit_effective_depth", "pit_depth_of_solution", "unbridged_fraction",
-           "pit_unbridged_fraction", "pass_cv"]
+           "pit_unbridged_fraction", "pass_cv", "pit_load_fraction_device", "unbridged_fraction_device",
+           "pit_of_solution_device"]
 
 # ------------------------------------------------------------------------------ pit physics
 def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
@@ -178,3 +179,75 @@ def pass_cv(pit_diameter, contact_semi_axis_b, cv_max) -> float:
     """Coefficient of variation of the per-pass impact factor, ``cv_max`` times
     :func:`unbridged_fraction`."""
     return float(cv_max) * unbridged_fraction(pit_diameter, contact_semi_axis_b)
+
+
+# ------------------------------------------------------------------------ the same in JAX
+# For a data set chunk's compiled program (traced arrays, vmap over items): the same formulas
+# as above, the Simpson rule on the same n points.
+
+def pit_load_fraction_device(a, b, pit_diameter, offset=0.0, n=2001):
+    """:func:`pit_load_fraction` as a JAX function (jit/vmap; ``n`` static)."""
+    import jax.numpy as jnp
+
+    n = n | 1
+    a, b = jnp.asarray(a, jnp.float64), jnp.asarray(b, jnp.float64)
+    r, e = 0.5 * jnp.asarray(pit_diameter, jnp.float64), jnp.abs(jnp.asarray(offset, jnp.float64))
+    lo, hi = jnp.maximum(e - r, -a), jnp.minimum(e + r, a)
+    valid = (r > 0.0) & (lo < hi) & (a > 0.0) & (b > 0.0)
+    a_, b_ = jnp.where(valid, a, 1.0), jnp.where(valid, b, 1.0)
+    lo, hi = jnp.where(valid, lo, 0.0), jnp.where(valid, hi, 1.0)
+    x = lo + (hi - lo) * jnp.linspace(0.0, 1.0, n)
+    c = b_ * jnp.sqrt(jnp.clip(1.0 - (x / a_) ** 2, 0.0, None))
+    y0 = jnp.minimum(jnp.sqrt(jnp.clip(r * r - (x - e) ** 2, 0.0, None)), c)
+    ratio = jnp.where(c > 0, y0 / jnp.where(c > 0, c, 1.0), 0.0)
+    inner = y0 * jnp.sqrt(jnp.clip(c * c - y0 * y0, 0.0, None)) + c * c * jnp.arcsin(jnp.clip(ratio, 0.0, 1.0))
+    w = jnp.ones(n).at[1:-1:2].set(4.0).at[2:-1:2].set(2.0)
+    integral = (hi - lo) / (n - 1) / 3.0 * jnp.sum(w * inner / b_)
+    return jnp.where(valid, jnp.minimum(1.0, integral / (2.0 / 3.0 * np.pi * a_ * b_)), 0.0)
+
+
+def _contact_device(sol, bearing, j, race, centred):
+    import jax.numpy as jnp
+
+    get = lambda name: getattr(sol, f"{name}_{race}")[j]  # noqa: E731
+    alpha = get("alpha")
+    f = bearing.f_outer if race == "outer" else bearing.f_inner
+    offset = 0.0 if centred else f * bearing.ball_diameter * jnp.abs(jnp.sin(alpha))
+    return get("delta"), get("a"), get("b"), offset
+
+
+def _depth_device(contact, w, machined, D):
+    import jax.numpy as jnp
+
+    delta, a, b, offset = contact
+    sag = 0.5 * D - jnp.sqrt(jnp.maximum(0.0, 0.25 * D * D - 0.25 * w * w))
+    phi = jnp.where(a > 0, jnp.minimum(1.0, pit_load_fraction_device(a, b, w, offset)), 0.0)
+    h = jnp.maximum(delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
+    return jnp.minimum(jnp.minimum(h, sag), machined)
+
+
+def unbridged_fraction_device(pit_diameter, contact_semi_axis_b):
+    """:func:`unbridged_fraction` as a JAX function."""
+    import jax.numpy as jnp
+
+    w = jnp.asarray(pit_diameter, jnp.float64)
+    return jnp.where(w > 0.0, jnp.maximum(0.0, 1.0 - 2.0 * contact_semi_axis_b / jnp.where(w > 0, w, 1.0)), 0.0)
+
+
+def pit_of_solution_device(sol, bearing, j, location, pit_diameter, machined_depth):
+    """(effective depth, unbridged fraction) of :func:`pit_depth_of_solution` and
+    :func:`pit_unbridged_fraction` for ball ``j`` of one healthy quasi-static state ``sol``
+    (JAX arrays, jit/vmap); ``location`` an index into :data:`PIT_LOCATIONS` (traced: every
+    race is evaluated and the item's taken)."""
+    import jax.numpy as jnp
+
+    D = bearing.ball_diameter
+    w, m = jnp.asarray(pit_diameter, jnp.float64), jnp.asarray(machined_depth, jnp.float64)
+    co, ci = _contact_device(sol, bearing, j, "outer", False), _contact_device(sol, bearing, j, "inner", False)
+    cbo, cbi = _contact_device(sol, bearing, j, "outer", True), _contact_device(sol, bearing, j, "inner", True)
+    d_o, d_i = _depth_device(co, w, m, D), _depth_device(ci, w, m, D)
+    d_b = 0.5 * (_depth_device(cbo, w, m, D) + _depth_device(cbi, w, m, D))
+    u_o, u_i = unbridged_fraction_device(w, co[2]), unbridged_fraction_device(w, ci[2])
+    depth = jnp.where(location == 0, d_o, jnp.where(location == 1, d_i, d_b))
+    unbridged = jnp.where(location == 0, u_o, jnp.where(location == 1, u_i, 0.5 * (u_o + u_i)))
+    return depth, unbridged

@@ -39,7 +39,7 @@ from jax import lax
 from .xla import jit
 
 __all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
-           "apply_sensor", "apply_sensor_batch", "measurement_noise", "G"]
+           "apply_sensor", "apply_sensor_batch", "measurement_noise", "G", "sensor_filter_device"]
 
 #: standard gravity (m/s^2), for noise levels given in g
 G = 9.80665
@@ -159,3 +159,21 @@ def measurement_noise(rng: np.random.Generator, n, rms, fs=None, band=None) -> n
         x = np.fft.irfft(X, n)
     s = float(np.sqrt(np.mean(x * x))) if n else 0.0
     return x * (float(rms) / s) if s > 0 else x * 0.0
+
+
+def sensor_filter_device(frequencies, damping_ratios, gains, h) -> SensorFilter:
+    """:func:`sensor_filter` as a traceable JAX function (jit/vmap: the matrix exponential of
+    each mode's augmented system by :func:`jax.scipy.linalg.expm`), for filters built inside a
+    compiled program from per-item modes ``(M,)``; ``h`` may be traced."""
+    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
+    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
+    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
+    w = 2.0 * np.pi * f
+    zero, one = jnp.zeros_like(w), jnp.ones_like(w)
+    M = jnp.stack([jnp.stack([zero, one, zero, zero], -1),
+                   jnp.stack([-w * w, -2.0 * z * w, -one, zero], -1),
+                   jnp.stack([zero, zero, zero, one], -1),
+                   jnp.stack([zero, zero, zero, zero], -1)], -2)
+    E = jax.vmap(jax.scipy.linalg.expm)((M * h).reshape((-1, 4, 4))).reshape(M.shape)
+    C = jnp.stack([-w * w, -2.0 * z * w], axis=-1)
+    return SensorFilter(E[..., :2, :2], E[..., :2, 2], E[..., :2, 3] / h, C, g, w, z)

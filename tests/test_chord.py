@@ -134,7 +134,7 @@ def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
         jax.config.update("jax_log_compiles", before)
     assert r.result == 0
     compiles = [(rec.threadName, rec.getMessage()) for rec in caplog.records if "Compiling" in rec.getMessage()]
-    names = ("jit(ball_errors)", "jit(_advance)")
+    names = ("jit(ball_errors)", "jit(_advance_device)")
     for name in names:
         threads = [t for t, m in compiles if name in m]
         assert threads, f"{name} was not compiled at all: {compiles}"

@@ -10,6 +10,7 @@ exactly afterwards.  One concept per module:
 ``model``              the shaft/housing equations, their equilibrium at t = 0, linear modes
 ``integrate``          fixed-step chunked time loop (and the adaptive diffrax reference)
 ``simulate``           one simulation: :func:`simulate`, :class:`DynamicsResult`
+``program``            a data set chunk as compiled device programs: :func:`chunk_program`
 ``batch``              items in lockstep: :func:`simulate_batch` (one program for all classes)
 =====================  ==========================================================================
 """
@@ -17,8 +18,9 @@ exactly afterwards.  One concept per module:
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 # ------------------------------------------------------------------------------ motion
-from .motion import (Motion, defect_edge_times, defect_pass_times, defect_phase, draw_motion,
-                     motion_at, motion_labels, seed_streams)
+from .motion import (DeviceMotion, Motion, crossings_device, defect_edge_times, defect_pass_times, defect_phase,
+                     defect_times_device, device_motion_of, draw_motion, draw_motion_device, knot_count, motion_at,
+                     motion_at_device, motion_labels, motion_ok_device, pass_count, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
 from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, BallCarry, ball_errors,
@@ -29,11 +31,12 @@ from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, B
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
 
 # --------------------------------------------------------------------------- integration
-from .integrate import CHUNK, SCHEMES, run_adaptive, run_fixed, time_grid
+from .integrate import CHUNK, SCHEMES, jumps_device, run_adaptive, run_fixed, stage_grid, stages_device, time_grid
 
 # ------------------------------------------------------------------------- entry points
 from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
                        simulate_case, spin_ratio, unbridged_of, vary_sensor)
+from .program import MENU, MOTION_STREAM, ChunkProgram, chunk_program, item_keys, iterations_needed, menu_iterations
 from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
                     simulate_batch)
 
@@ -49,9 +52,12 @@ __all__ = [
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
     "CHORD_TOL", "BallCarry", "initial_ball_carry", "bearing_force_chord",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
-    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid",
+    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "stages_device", "jumps_device",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
     "load_zone_centre", "unbridged_of", "vary_sensor",
     "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
     "simulate_batch",
+    "DeviceMotion", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of", "knot_count",
+    "crossings_device", "defect_times_device", "pass_count",
+    "MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
 ]

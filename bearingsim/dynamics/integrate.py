@@ -36,9 +36,10 @@ from ..errors import InputError
 from ..xla import compiler_options, jit
 from .ball_force import initial_ball_carry
 from .model import DynamicModel
-from .motion import Motion, motion_at
+from .motion import Motion, device_motion_of, motion_at, motion_at_device
 
-__all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive"]
+__all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive",
+           "stage_grid", "stages_device", "jumps_device", "advance_record"]
 
 #: explicit Runge-Kutta schemes: (c, a, b)
 SCHEMES = {
@@ -60,14 +61,14 @@ def check_scheme(scheme):
 
 
 def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, record: bool = False,
-             chord: bool = False):
+             chord: bool = False, lean: bool = False):
     """Advance over a chunk: ``stages`` (N, S, n_c, 3) motion at the non-zero stage points of
     every step, ``jumps`` (N, S) the fraction of the step at which a ball crosses a rectangular
     spall edge (-1: none).  carry = (y, dy, s, rec): state, its derivative, sensor-mode states,
     the balls' record (RECORD_ROWS, Z) at y (:meth:`DynamicModel.ring_load`; only with
     ``record``: Newmark takes it from the step's own force evaluation, the Runge-Kutta schemes
     evaluate it once more).  Returns the new carry and per sample (y, a_h (2), sensor[, rec])
-    at the sample instant."""
+    at the sample instant (``lean``: (a_h x, sensor) only)."""
     c, a, b = SCHEMES[scheme]
     cs = sorted(set(c) - {0.0})
     idx = [None if ci == 0.0 else cs.index(ci) for ci in c]
@@ -115,7 +116,10 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
     def sample(carry, xs):
         st_sample, th_sample = xs
         y, k1, s = carry[:3]
-        out = (y, k1[8:10], sensor_mod.filter_output(flt, s, k1[8])) + ((carry[3],) if record else ())
+        if lean:
+            out = (k1[8], sensor_mod.filter_output(flt, s, k1[8]))
+        else:
+            out = (y, k1[8:10], sensor_mod.filter_output(flt, s, k1[8])) + ((carry[3],) if record else ())
         for j in range(st_sample.shape[0]):         # substeps: a static, small count
             carry, _ = step(carry, st_sample[j], th_sample[j])
         return carry, out
@@ -124,6 +128,23 @@ def _advance(model: DynamicModel, carry, stages, jumps, h, flt, scheme: str, rec
 
 
 _advance_jit = jit(_advance)
+
+
+def _advance_device(model, carry, m, edges, k0, h, flt, scheme, substeps, fs, record, chord):
+    """:func:`_advance` over samples k0..k0+CHUNK-1 with the stage and jump arrays built in the
+    program from the :class:`DeviceMotion` ``m`` and the padded edge times (no host arrays per
+    chunk)."""
+    Z = model.bearing.n_balls
+    stages = stages_device(m, Z, k0, CHUNK, fs, scheme, substeps)
+    jumps = jumps_device(edges, k0, CHUNK, substeps, h)
+    return _advance(model, carry, stages, jumps, h, flt, scheme, record, chord)
+
+
+_advance_device_jit = jit(_advance_device)
+
+
+def _pad_to(n, block=256):
+    return block * (n // block + 1)
 
 
 def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
@@ -161,6 +182,40 @@ def _chunk_stages(m: Motion, grid, k0, n, fs):
     return np.stack(motion_at(m, t), axis=-1)
 
 
+def stage_grid(scheme, substeps):
+    """(S, n_c) stage points of every sample's steps, in samples (the non-zero stage points of
+    the scheme; Newmark: the end of each step)."""
+    return _stage_grid(scheme, substeps)
+
+
+def stages_device(m, Z, k0, n, fs, scheme, substeps):
+    """:func:`_chunk_stages` on the device (jit/vmap): the motion of the :class:`DeviceMotion`
+    ``m`` at the stage points of samples k0..k0+n-1 (``n``, ``scheme``, ``substeps`` static;
+    ``k0`` may be traced): (n, S, n_c, 3)."""
+    grid = jnp.asarray(_stage_grid(scheme, substeps))
+    t = (k0 + jnp.arange(n, dtype=jnp.float64)[:, None, None] + grid[None]) / fs
+    return jnp.stack(motion_at_device(m, Z, t), axis=-1)
+
+
+def jumps_device(edges, k0, n, substeps, h):
+    """:func:`_chunk_jumps` on the device: (n, S) fraction of each step of samples k0..k0+n-1
+    at which a defect edge is crossed (-1: none); ``edges`` ascending, padded with +inf."""
+    steps = ((k0 + jnp.arange(n, dtype=jnp.float64))[:, None] * substeps
+             + jnp.arange(substeps, dtype=jnp.float64)[None, :])
+    t0 = steps * h
+    i = jnp.searchsorted(edges, t0.ravel(), side="left").reshape(t0.shape)
+    te = jnp.where(i < edges.shape[0], edges[jnp.minimum(i, edges.shape[0] - 1)], jnp.inf)
+    frac = (te - t0) / h
+    return jnp.where(frac < 1.0, frac, -1.0)
+
+
+def advance_record(model, carry, stages, jumps, h, flt, scheme, record=False, chord=False, lean=False):
+    """The time loop over the samples of ``stages`` (n, S, n_c, 3) / ``jumps`` (n, S) as a pure
+    function (one ``lax.scan``; for use inside a compiled program): (carry, outputs) as
+    :func:`_advance`."""
+    return _advance(model, carry, stages, jumps, h, flt, scheme, record, chord, lean)
+
+
 def time_grid(duration, sample_rate):
     n = int(round(float(duration) * float(sample_rate)))
     if n < 2:
@@ -196,20 +251,28 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
+    if not batch:       # one model: the stages and jumps are built on the device, chunk by chunk
+        md = device_motion_of(motions, T / fs, 256)
+        e = np.asarray(edges, float)
+        edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):
-        stg = np.stack([_chunk_stages(m, grid, k0, CHUNK, fs) for m in ms])
-        jmp = np.stack([_chunk_jumps(e, k0, CHUNK, substeps, h) for e in es])
+        n = min(CHUNK, T - k0)
         if batch:
+            stg = np.stack([_chunk_stages(m, grid, k0, CHUNK, fs) for m in ms])
+            jmp = np.stack([_chunk_jumps(e, k0, CHUNK, substeps, h) for e in es])
             carry, out = _advance_batch_jit(model, carry, jnp.asarray(stg), jnp.asarray(jmp),
                                             jnp.full(len(ms), h), flt, scheme)
+            outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n], out))
         else:
-            carry, out = _advance_jit(model, carry, jnp.asarray(stg[0]), jnp.asarray(jmp[0]),
-                                      jnp.float64(h), flt, scheme, record, chord)
-        n = min(CHUNK, T - k0)
-        # the sample axis is the first of an item's outputs
-        outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n] if batch else np.asarray(a)[:n], out))
+            carry, out = _advance_device_jit(model, carry, md, edges_dev, jnp.float64(k0), jnp.float64(h), flt,
+                                             scheme, int(substeps), float(fs), record, chord)
+            outs.append(out)            # stays on the device until the end (no round trip per chunk)
+            if bar is not None:
+                jax.block_until_ready(carry[0])
         if bar is not None:
             bar.update(n)
+    if not batch:           # fetched once, joined on the host (no device ops to compile)
+        outs = [jax.tree_util.tree_map(lambda *a: np.concatenate([np.asarray(x) for x in a], axis=0)[:T], *outs)]
     if bar is not None:
         bar.close()
     y = np.concatenate([o[0] for o in outs], axis=-2)

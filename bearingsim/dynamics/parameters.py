@@ -33,6 +33,8 @@ class RESULTS(ResultCode):
                            "the quasi-static state", "raise ball_iterations; report the case")
     ball_solver = (4, "the lean ball solver does not reach the required accuracy with at most "
                    "16 Newton steps", "pass ball_iterations explicitly, or report the case")
+    fixed_size = (5, "the run's slip walk or defect passes exceed the fixed sizes of the compiled chunk "
+                  "program", "raise max_speed_rpm of the chunk program (it sizes them), or report the case")
 
 
 class DynamicsError(NotConvergedError):

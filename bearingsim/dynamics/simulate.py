@@ -27,7 +27,8 @@ from ..xla import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
-from .motion import defect_edge_times, defect_pass_times, draw_motion, motion_at, motion_labels, seed_streams
+from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, draw_motion_device, host_motion_of,
+                     knot_count, motion_at, motion_labels, seed_streams)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "characteristic_frequencies", "spin_ratio", "slip_reference",
@@ -205,12 +206,29 @@ def ball_records(model, rel, theta, phi, omega, iterations):
     return [np.concatenate(a) for a in zip(*outs)]
 
 
+def _draw_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots):
+    return draw_motion_device(jax.random.fold_in(key, MOTION_STREAM), Z, theta0, omega_c, omega0, duration, center,
+                              realism, n_knots)
+
+
+_draw_from_key_jit = jit(_draw_from_key)
+
+
+def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots, seed):
+    wc = omega_c if np.isfinite(omega_c) and omega_c > 0 else 0.0
+    if n_knots is None:
+        n_knots = knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
+    dm = _draw_from_key_jit(jnp.asarray(key, jnp.uint32), Z, jnp.float64(theta0), jnp.float64(wc),
+                            jnp.float64(omega0), float(duration), jnp.float64(center), realism, int(n_knots))
+    return host_motion_of(dm, Z, seed)
+
+
 def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
              params: DynamicsParameters | None = None, duration=0.1, sample_rate=48000.0, *,
              theta0=0.0, realism: Realism | None = None, seed=0, hertz_method="exact",
              scheme="newmark", substeps="auto", ball_iterations="auto", record_balls=True,
              integrator="fixed", rtol=1e-8, atol=1e-8, sensor_coupling=False, progress=None,
-             throw=True, ball_solver="chord") -> DynamicsResult:
+             throw=True, ball_solver="chord", key=None, n_knots=None) -> DynamicsResult:
     """Time simulation of MODEL.md section 7 (the model: :mod:`bearingsim.dynamics.model`).
 
     ``loads`` [Fx, Fy, Fz, Mx, My] (N, N m), ``spall`` None (healthy), a :class:`Spall` on the
@@ -227,6 +245,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     balls' positions from step to step and solves them in full only at defect edges and where a
     chord step misses its tolerance, :func:`bearingsim.dynamics.bearing_force_chord`; its
     counters in ``result.ball_solver_stats``) or "full" (every step from the closed form).
+    ``key``: a ``jax.random`` key (raw (2,) uint32): the motion is drawn from it as a data set
+    chunk's program draws it (:func:`bearingsim.dynamics.draw_motion_device`, stream
+    ``MOTION_STREAM``; ``n_knots`` the program's ``n_knots``, default the count this run needs),
+    so one item of a chunk can be re-run alone; None: from ``seed`` (:func:`draw_motion`).
     ``progress``: a tqdm bar (default: duration >= 1 s).  Raises
     :class:`DynamicsError` when the run fails and ``throw`` (else check ``result.result``).
     """
@@ -264,8 +286,12 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             ball_iterations = ITER_CHOICES[-1]
             code = code or RESULTS.ball_solver
     model = build_model(bearing, op, loads, defects, sol, params, curve, int(ball_iterations), k_spin)
-    m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
-                    slip_reference(defects), realism)
+    if key is None:
+        m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
+                        slip_reference(defects), realism)
+    else:
+        m = _motion_from_key(key, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
+                             slip_reference(defects), realism, n_knots, seed)
     st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
