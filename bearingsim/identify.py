@@ -22,6 +22,9 @@ mean cage slip of up to :data:`SLIP_MAX` adds.
 """
 from __future__ import annotations
 
+import sys as _sys
+import types as _types
+
 import json
 import math
 import os
@@ -577,3 +580,14 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
         fig.savefig(path, dpi=110)
     return fig
 
+
+
+class _CallableModule(_types.ModuleType):
+    """``bearingsim.identify(...)`` is :func:`identify`: the package exports this module as its noun (Python
+    sets ``bearingsim.identify`` to the module whenever it is imported, so the module itself answers)."""
+
+    def __call__(self, *args, **kwargs):
+        return identify(*args, **kwargs)
+
+
+_sys.modules[__name__].__class__ = _CallableModule
