@@ -259,7 +259,15 @@ def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     task, with the same numbers (a batched study stays in this process: it is one vmapped solve
     already, docs/scale.md).  Raises InputError
     without ``[study]`` or for a key that changes the shape of the results (``bearing.balls``,
-    ``sweep.steps``)."""
+    ``sweep.steps``).
+
+    A case with a ``[set]`` section: the set's state per value
+    (:func:`bearingsim.sets.study_set_case` -> ``SetStudy``; one batched solve, in this process:
+    ``progress`` and ``runner`` do not apply)."""
+    if case.is_set:
+        from .sets import study_set_case
+
+        return study_set_case(case, throw=throw)
     import jax
 
     spec = case.study_settings()
