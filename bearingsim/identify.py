@@ -22,9 +22,6 @@ mean cage slip of up to :data:`SLIP_MAX` adds.
 """
 from __future__ import annotations
 
-import sys as _sys
-import types as _types
-
 import json
 import math
 import os
@@ -37,6 +34,7 @@ import numpy as np
 from .errors import InputError
 from .fault_size import (PASS_FEATURE_NAMES, angle_from_order, line_frequency, pass_features,
                          surface_speed)
+from .names import noun_module
 from .features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from .records import MIN_SECONDS, check_record, read_record
 
@@ -582,12 +580,6 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
 
 
 
-class _CallableModule(_types.ModuleType):
-    """``bearingsim.identify(...)`` is :func:`identify`: the package exports this module as its noun (Python
-    sets ``bearingsim.identify`` to the module whenever it is imported, so the module itself answers)."""
 
-    def __call__(self, *args, **kwargs):
-        return identify(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _CallableModule
+# ``bearingsim.identify(...)`` calls :func:`identify` (the package exports this module as its noun)
+noun_module(__name__, "identify")

@@ -20,9 +20,6 @@ angle and the spall azimuth, and either may be swept with the other held.
 """
 from __future__ import annotations
 
-import sys as _sys
-import types as _types
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -31,6 +28,7 @@ import numpy as np
 from .hertz import stiffness_curve
 from .defect import Spall, as_defects, canonical_defects, contact_depths
 from .jones import JonesSolution, raise_for, solve, solve_state
+from .names import noun_module
 from .newton import retry_failed, traced_tolerances
 from .xla import jit
 
@@ -284,12 +282,6 @@ def sweep_chunked(bearing, op, loads, spall, angles, chunk=256, progress=None, *
     return jax.tree_util.tree_map(lambda *a: jnp.concatenate(a, axis=0), *parts)
 
 
-class _CallableModule(_types.ModuleType):
-    """``bearingsim.sweep(...)`` is :func:`sweep`: the package exports this module as its noun (Python
-    sets ``bearingsim.sweep`` to the module whenever it is imported, so the module itself answers)."""
 
-    def __call__(self, *args, **kwargs):
-        return sweep(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _CallableModule
+# ``bearingsim.sweep(...)`` calls :func:`sweep` (the package exports this module as its noun)
+noun_module(__name__, "sweep")
