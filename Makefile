@@ -8,7 +8,8 @@ OUT    ?= results/demo
 export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.jax_cache
 export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0.5
 # one pytest worker per core (2 on CI); each file stays on one worker, so its compiled programs
-# are compiled once
+# are compiled once; files go out longest first (tests/conftest.py HEAVY_FIRST, xdist's
+# reorder by test count off) so both workers finish together
 JOBS ?= 2
 
 .PHONY: demo test venv clean bench
@@ -25,7 +26,7 @@ demo: $(STAMP)
 	$(VENV)/bin/bearingsim demo --out $(OUT)
 
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider -n $(JOBS) --dist loadfile tests $(wildcard notebooks/*.ipynb) --nbmake --durations=20
+	$(PY) -m pytest -q -p no:cacheprovider -n $(JOBS) --dist loadfile --no-loadscope-reorder tests $(wildcard notebooks/*.ipynb) --nbmake --durations=20
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_compile.py

@@ -16,6 +16,33 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 DEG = np.pi / 180
 
+# Longest first (make test: pytest-xdist, one file per worker at a time, `--dist loadfile
+# --no-loadscope-reorder`): the files below go to the workers first, heaviest first, so the two
+# workers finish together instead of one of them running notebook 02 or test_identify alone at the
+# end (xdist's own reorder puts files with the most test ids first, which sends these few-but-long
+# files and every notebook last).  Seconds: the `--durations` totals of a contended full run
+# (issue 27, fulltest_durations.log); only their order matters, the rest keeps collection order.
+HEAVY_FIRST = {
+    "tests/test_shaft.py": 219, "tests/test_chunk_program.py": 208, "tests/test_dynamics.py": 184,
+    "tests/test_identify.py": 153, "tests/test_defect.py": 115, "tests/test_fault_classes.py": 114,
+    "tests/test_workflows.py": 112, "notebooks/02_spall_and_sweep.ipynb": 103,
+    "tests/test_sweep.py": 101, "tests/test_verdicts.py": 75, "tests/test_transfer.py": 69,
+    "tests/test_distributed.py": 67, "tests/test_cli.py": 65, "tests/test_packaging.py": 61,
+    "notebooks/07_sim_to_real.ipynb": 55, "tests/test_jones.py": 55, "tests/test_chord.py": 52,
+    "tests/test_dataset.py": 46, "notebooks/01_quasi_static.ipynb": 44,
+    "tests/test_set_limits.py": 40, "tests/validation/test_set_reference.py": 40,
+    "notebooks/09_identify.ipynb": 36, "tests/test_dataset_engine.py": 36,
+    "tests/test_signal_stage.py": 35, "notebooks/06_four_fault_classes.ipynb": 34,
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Stable-sort the session's items: HEAVY_FIRST files first (longest first), then the rest in
+    collection order; the tests of one file keep their order."""
+    def weight(item):
+        return -HEAVY_FIRST.get(item.nodeid.split("::")[0], 0)
+    items.sort(key=weight)
+
 
 def harris218(n_balls=16, **kw):
     """Harris & Kotzalas' 218 angular contact ball bearing (reference-data.md)."""
