@@ -45,7 +45,7 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
     The fault's RMS over the background's, ``fault_snr_dB`` (down to negative dB), as the gain of
     the fault signal.
 
-Inside the data engine's chunk program (per item, vmapped): ``key = item_key(seed, index)``;
+Inside the data engine's chunk program (per item, vmapped): ``key = item_key(seed, index)`` (the item key's ``nuisance`` stream);
 ``record, labels = item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz,
 bpfo_hz, bpfi_hz, bsf_hz, settings)`` with ``fault`` the item's bearing signal after the sensor
 path (any level: the gain is set here), ``background`` its background record (the same length),
@@ -58,6 +58,8 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+
+from .keys import STREAMS, item_keys
 
 __all__ = ["NUISANCE_DEFAULTS", "INGREDIENTS", "item_signal", "ball_fault_modulation", "shaft_modulation", "nuisance_signal", "fault_level",
            "load_zone_factor", "band_noise", "item_key", "settings_of"]
@@ -116,9 +118,10 @@ def settings_of(settings=None) -> dict:
 
 
 def item_key(seed, index):
-    """The key of item ``index`` of a data set seeded ``seed`` (jax.random.fold_in twice, with the
-    stream number 26 between: independent of any other stream of the same seed)."""
-    return jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(seed), 26), index)
+    """The nuisance stream of item ``index`` of a data set seeded ``seed``: the item's key
+    (:func:`bearingsim.keys.item_keys`) folded with ``STREAMS["nuisance"]``, independent of every
+    other stream of the item (:data:`bearingsim.keys.STREAMS`)."""
+    return jax.random.fold_in(item_keys(seed, jnp.reshape(index, (1,)))[0], STREAMS["nuisance"])
 
 
 def _u(key, r):

@@ -25,7 +25,7 @@ What it does to one item (the order of :func:`finish_items`):
 
 Random streams: every draw comes from ``jax.random.fold_in(key, STREAMS[name])`` of the item's
 key (:func:`item_keys`), so an item does not depend on its chunk, the chunk size or the device
-count.  Stream numbers below 100 other than those here are left to the motion (slip, speed).
+count.  The stream numbers are those of :data:`bearingsim.keys.STREAMS` (one registry).
 The draws are not NumPy's: a data set made this way is a new version of the random streams.
 
 :class:`SignalSettings` holds everything static (hashable: a compiled program per settings and
@@ -40,7 +40,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import keys as _keys
 from .background import BACKGROUND_DEFAULTS, Background
+from .keys import item_keys, stream_key
 from .sensor import SensorFilter, filter_init, filter_output, filter_update
 from .xla import jit
 
@@ -51,8 +53,8 @@ __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_ke
            "vary_passes", "discretise_modes", "run_modes", "measurement_noise", "fault_level", "finish_item",
            "finish_items", "LABELS"]
 
-#: the item key's sub-streams (``jax.random.fold_in(key, n)``) this module draws from
-STREAMS = {"noise": 3, "passes": 9, "strike": 10, "background": 11, "randomisation": 1001, "transfer": 1002}
+#: the item key's sub-streams (``jax.random.fold_in(key, n)``): the one registry, :data:`bearingsim.keys.STREAMS`
+STREAMS = _keys.STREAMS
 
 #: label fields :func:`finish_items` returns, each (N,)
 LABELS = ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent",
@@ -139,17 +141,6 @@ class SignalSettings:
         rate = float(Background(*self.machine).knock_rate) if machine else float(self.ranges["knock_rate_Hz"][1])
         lam = rate * self.samples / self.fs
         return max(1, int(poisson.isf(KNOCK_TAIL, lam)) + 1) if lam > 0 else 1
-
-
-def item_keys(seed, index) -> jnp.ndarray:
-    """(N, 2) uint32 keys of items ``index`` of a run seeded ``seed``: ``fold_in(PRNGKey(seed), i)``."""
-    base = jax.random.PRNGKey(int(seed))
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.asarray(index, jnp.uint32))
-
-
-def stream_key(key, name):
-    """The item key's sub-stream ``name`` (:data:`STREAMS`)."""
-    return jax.random.fold_in(key, STREAMS[name])
 
 
 def _logu(key, lo, hi, shape=()):

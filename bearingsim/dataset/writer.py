@@ -35,7 +35,7 @@ __all__ = ["CHUNK_FORMAT", "COMPRESSIONS", "DEFAULT_COMPRESSION", "partial_path"
 
 #: layout of the chunk files (4: a folder of .npy arrays per chunk; items drawn from keys); a
 #: partial folder of another layout is refused like one of another spec
-CHUNK_FORMAT = 4
+CHUNK_FORMAT = 5
 #: codecs of /signals: name -> h5py create_dataset keywords
 COMPRESSIONS = {"none": {}, "lzf": {"compression": "lzf"}, "gzip": {"compression": "gzip", "compression_opts": 4},
                 "gzip1": {"compression": "gzip", "compression_opts": 1}, "zstd": None}
