@@ -1,8 +1,12 @@
-"""bearingsim: angular contact ball bearings with an outer-raceway spall.
+"""bearingsim: angular contact ball bearings with localized defects.
 
-Pipeline: geometry -> hertz -> jones (+defect) -> sweep -> dynamics -> signal,
-with case/io/plots/cli at the edge.  The core (everything up to ``signal``)
-is pure JAX in float64 and knows nothing of files or printing.
+Pipeline: geometry -> hertz -> jones (+defect; shaft for sets) -> sweep -> dynamics -> signal ->
+data sets, with case/workflows/io/plots/cli at the edge (docs/architecture.md).  The core is pure
+JAX in float64 and knows nothing of files or printing.
+
+The nouns a user types are here, imported at first use: ``bearingsim.solve``, ``solve_set``,
+``sweep``, ``simulate``, ``load_case``, ``solve_case``, ``make_dataset``, ``load_dataset``,
+``identify``, ... (``dir(bearingsim)`` lists them).
 """
 import os as _os
 import sys as _sys
@@ -28,7 +32,11 @@ _runtime.configure()        # float64 and the persistent compilation cache, befo
 from ._version import __version__  # noqa: E402
 
 #: the names a user types, and the module each comes from: imported at first use (PEP 562), so
-#: that ``import bearingsim`` and ``bearingsim --help`` do not load JAX
+#: that ``import bearingsim`` and ``bearingsim --help`` do not load JAX.  The edge's nouns
+#: (``load_case``, ``make_dataset``, ``load_dataset``, ``identify``) are named here too: a string
+#: is no import, so ``import bearingsim`` still loads no edge module.  ``sweep`` and ``identify``
+#: are modules that answer to their noun: ``bearingsim.sweep(...)`` calls ``sweep.sweep``
+#: whether or not the module was imported before.
 _EXPORTS = {
     "geometry": ("Bearing", "Material", "STEEL", "SILICON_NITRIDE"),
     "hertz": ("ellipk_ellipe", "ellipticity", "contact_constant", "hertz_contact", "HertzContact",
@@ -39,7 +47,16 @@ _EXPORTS = {
     "balls": ("BallState", "balls_at", "reactions_from_balls"),
     "jones": ("JonesSolution", "RESULTS", "OverloadWarning", "solve", "solve_state", "solve_batch",
               "ring_reactions", "load_vector", "Loads"),
+    "shaft": ("BearingSet", "SetSolution", "solve_set", "solve_set_batch"),
+    "sweep": ("sweep", "sweep_chunked"),
+    "life": ("rating_life",),
+    "limits": ("contact_limits",),
+    "dynamics": ("simulate", "simulate_batch", "DynamicsParameters", "DynamicsResult"),
+    "case": ("load_case", "Case"),
+    "workflows": ("solve_case", "sweep_case", "study_case", "simulate_case"),
+    "dataset": ("make_dataset",),
     "mldata": ("load_dataset", "WindowDataset"),
+    "identify": ("identify",),
 }
 _WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
 
@@ -50,7 +67,10 @@ def __getattr__(name):
         raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
     import importlib
 
-    value = getattr(importlib.import_module(f".{mod}", __name__), name)
+    module = importlib.import_module(f".{mod}", __name__)
+    # a module that answers to its own noun (sweep, identify) stays the module: Python sets the
+    # package's attribute to the submodule whenever it is first imported
+    value = module if name == mod else getattr(module, name)
     globals()[name] = value
     return value
 
@@ -96,6 +116,26 @@ __all__ = [
     "solve_batch",
     "ring_reactions",
     "Loads",
+    "BearingSet",
+    "SetSolution",
+    "solve_set",
+    "solve_set_batch",
+    "sweep",
+    "sweep_chunked",
+    "rating_life",
+    "contact_limits",
+    "simulate",
+    "simulate_batch",
+    "DynamicsParameters",
+    "DynamicsResult",
+    "load_case",
+    "Case",
+    "solve_case",
+    "sweep_case",
+    "study_case",
+    "simulate_case",
+    "make_dataset",
     "load_dataset",
     "WindowDataset",
+    "identify",
 ]

@@ -103,48 +103,14 @@ def _compiled(case, command):
 
 # ------------------------------------------------------------------------------- commands
 def cmd_info(args):
-    case = load_case(args.case)
-    print(report.info_text(case))
-    if case.is_set:
-        from . import sets
-        print(sets.set_info_text(case))
+    print(workflows.info_text(load_case(args.case)))
     return 0
-
-
-def _static_set(case, json_path, plot_path):
-    from . import sets
-    sol = sets.solve_set_case(case)
-    print(sets.set_text(case, sol))
-    if json_path:
-        io.write_json(json_path, sets.set_to_dict(case, sol))
-        _wrote(json_path)
-    if plot_path:
-        sets.plot_set_static(sol, title=case.title, path=plot_path)
-        _wrote(plot_path)
-
-
-def _static(case, json_path, plot_path):
-    if case.is_set:
-        return _static_set(case, json_path, plot_path)
-    sol = workflows.solve_case(case)
-    assessment = workflows.assess_case(case, sol)
-    print(report.static_text(case, sol, assessment))
-    if json_path:
-        io.write_static(json_path, sol, assessment)
-        print()
-        _wrote(json_path)
-    if plot_path:
-        from .plots import plot_static
-
-        Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
-        plot_static(sol, title=case.title, spall=case.spall(), path=plot_path)
-        _wrote(plot_path)
 
 
 def cmd_static(args):
     case = load_case(args.case)
     _compiling(case, "static")
-    _static(case, args.json, args.plot)
+    workflows.static_command(case, args.json, args.plot, say=print)
     _compiled(case, "static")
     return 0
 
@@ -179,43 +145,8 @@ def cmd_study(args):
     case = load_case(args.case)
     budget.check_case(case, "study", args.output)
     _compiling(case, "study")
-    if case.is_set:
-        from . import sets
-        study = sets.study_set_case(case, throw=False)
-        _warn_failures(study.solution.result, "study states")
-        table = sets.set_study_table(case, study)
-        sets.write_set_study(args.output, case, study, table)
-        csv = Path(args.output).with_suffix(".csv")
-        sets.write_set_study_csv(csv, case, study, table)
-        print(sets.set_study_text(case, study))
-        _wrote(args.output, csv)
-        if args.plot:
-            p = _plot_dir(args.plot) / ("study_set_" + study.parameter.replace(".", "_") + ".png")
-            sets.plot_set_study(study, title=case.title, path=p, table=table)
-            _wrote(p)
-            p = _plot_dir(args.plot) / ("limits_set_" + study.parameter.replace(".", "_") + ".png")
-            sets.plot_set_limits(case, study, title=case.title, path=p)
-            _wrote(p)
-        _compiled(case, "study")
-        return 0
-    if args.workers is None and args.scheduler is None:
-        study = workflows.study_case(case, throw=False, progress=True)
-    else:
-        from .distributed import DaskRunner
-
-        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
-            study = workflows.study_case(case, throw=False, progress=True, runner=runner)
-    _warn_failures(study.solution.result, "study states")
-    io.write_study(args.output, case, study)
-    print(report.study_text(case, study))
-    _wrote(args.output)
-    if args.plot:
-        from .plots import plot_study
-
-        p = _plot_dir(args.plot) / ("study_" + study.parameter.replace(".", "_") + ".png")
-        plot_study(study.solution, study.values, study.parameter, study.unit, title=case.title,
-                   spall=case.spall(), path=p)
-        _wrote(p)
+    workflows.study_command(case, args.output, args.plot, workers=args.workers, scheduler=args.scheduler,
+                            say=print, warn=_warn_failures)
     _compiled(case, "study")
     return 0
 
@@ -458,7 +389,7 @@ def cmd_demo(args):
     print(f"bearingsim demo: {case.source}\n")
     print(report.info_text(case), "\n")
     print("[1/4] quasi-static solve")
-    _static(case, out / "static.json", out / "static.png")
+    workflows.static_command(case, out / "static.json", out / "static.png", say=print)
     print("\n[2/4] cage-angle sweep past the spall")
     _sweep(case, out / "sweep.h5", out)
     if "dynamics" in case.raw and case.spall() is not None:

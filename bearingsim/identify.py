@@ -34,6 +34,7 @@ import numpy as np
 from .errors import InputError
 from .fault_size import (PASS_FEATURE_NAMES, angle_from_order, line_frequency, pass_features,
                          surface_speed)
+from .names import noun_module
 from .features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from .records import MIN_SECONDS, check_record, read_record
 
@@ -577,3 +578,8 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
         fig.savefig(path, dpi=110)
     return fig
 
+
+
+
+# ``bearingsim.identify(...)`` calls :func:`identify` (the package exports this module as its noun)
+noun_module(__name__, "identify")

@@ -7,4 +7,25 @@ LOCATIONS`` (``bearingsim.dataset.CLASSES``)."""
 #: where a localized defect can be: a spall on the outer or the inner raceway, a pit on a ball
 LOCATIONS = ("outer", "inner", "ball")
 
-__all__ = ["LOCATIONS"]
+__all__ = ["LOCATIONS", "noun_module"]
+
+
+def noun_module(module_name: str, noun: str):
+    """Make module ``module_name`` answer to its ``noun``: calling the module calls its function of
+    that name (``bearingsim.sweep(...)`` is ``bearingsim.sweep.sweep(...)``).  The package exports
+    these nouns; Python rebinds ``bearingsim.<name>`` to the submodule whenever it is imported, so
+    the module itself must answer.  Called at the end of the module."""
+    import sys
+    import types
+
+    module = sys.modules[module_name]
+
+    class NounModule(types.ModuleType):
+        __doc__ = module.__doc__
+
+        def __call__(self, *args, **kwargs):
+            return getattr(self, noun)(*args, **kwargs)
+
+    NounModule.__module__ = module_name
+    module.__class__ = NounModule
+    return module

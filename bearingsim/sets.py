@@ -1,7 +1,9 @@
 """Bearing sets on the edge (MODEL.md 10; core: :mod:`bearingsim.shaft`): the workflows
 (:func:`solve_set_case`, :func:`study_set_case`), the printed text, the JSON record and the
-figures of a case with a [set] section.  ``bearingsim static`` / ``study`` / ``info`` call these
-when the case describes a set.
+figures of a case with a [set] section.  :mod:`bearingsim.workflows` calls these when the case
+describes a set (``solve_case``, ``study_case``, ``info_text``, ``static_command``,
+``study_command`` dispatch on the case), so ``bearingsim static`` / ``study`` / ``info`` have no set
+branch.
 
 Azimuths are stated in the shaft frame (MODEL.md 10); per-bearing loads in each bearing's own
 frame (its axial load is positive when it carries load in its contact direction).

@@ -54,8 +54,10 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
 from .defect import as_defects, contact_depths
 from .errors import InputError
 from .hertz import contact_ellipse, power_eval, stiffness_curve
-from .jones import RESULTS, JonesSolution, initial_displacement, newton_step_status, raise_for, state_validity
+from .jones import RESULTS, JonesSolution, initial_displacement, raise_for, state_validity
 from .kinematics import Operation
+from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, step_status,
+                     traced_tolerances)
 from .xla import jit
 
 __all__ = [
@@ -95,10 +97,6 @@ ARRANGEMENTS = {
     "QT": (1, 1, 1, 1),     # quadruplex tandem
 }
 
-_LS_STEPS = 12
-_FREE_STEPS = 12
-_RING_CAP = 200.0          # um (tilts: um at the reference length) per Newton step
-_BALL_CAP = 2e-3           # x D per Newton step
 _PRELOAD_NEWTON = 40
 
 
@@ -486,12 +484,8 @@ def _jacobian(sy: _System, Ks):
 
 
 def _merit(sy, pieces):
-    m = jnp.max(jnp.abs(_reduced(sy, [p["R"] for p in pieces])))
-    for p in pieces:
-        m = jnp.maximum(m, jnp.max(jnp.abs(p["rb"])))
-        if "rbu" in p:
-            m = jnp.maximum(m, jnp.max(jnp.abs(p["rbu"])))
-    return m
+    return max_abs(_reduced(sy, [p["R"] for p in pieces]), *[p["rb"] for p in pieces],
+                   *[p.get("rbu") for p in pieces])
 
 
 def _direction(sy: _System, pieces, jacs):
@@ -510,20 +504,6 @@ def _direction(sy: _System, pieces, jacs):
         dYs.append(dY)
         dYus.append(dYu)
     return dxs, dYs, dYus, J
-
-
-def _cap(d, cap):
-    n = jnp.max(jnp.abs(d), axis=-1, keepdims=True)
-    d = jnp.where(n > cap, d * (cap / jnp.where(n > 0, n, 1.0)), d)
-    return jnp.where(jnp.isfinite(d), d, 0.0)
-
-
-def _maxabs(arrs):
-    m = jnp.float64(0.0)
-    for a in arrs:
-        if a is not None:
-            m = jnp.maximum(m, jnp.max(jnp.abs(a)))
-    return m
 
 
 def _closed_form_one(bk: _Bearing, op, qk, defect_free):
@@ -549,7 +529,7 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
     """Damped Newton on the set (jones' loop with the set's unknowns): returns
     (xz, Ys, Yus, jacs, code, iterations)."""
     groups = sy.groups
-    caps = [_BALL_CAP * bk.bearing.ball_diameter[:, None, None] / UM for bk in groups]
+    caps = [BALL_CAP * bk.bearing.ball_diameter[:, None, None] / UM for bk in groups]
 
     def lift(Ys, Yus):
         Ys = [_lift(bk, y, dc, False) for bk, y, dc in zip(groups, Ys, dcs)]
@@ -568,20 +548,18 @@ def _newton(sy: _System, op, xz0, Y0, Yu0, dcs, dcus, maxit, tol):
         jacs = [{kk: p[kk] for kk in _jac_keys(bk.defect)} for bk, p in zip(groups, pieces)]
         m = _merit(sy, pieces)
         dx, dYs, dYus, _ = _direction(sy, pieces, jacs)
-        sn = jnp.maximum(jnp.max(jnp.abs(dx)), jnp.maximum(_maxabs(dYs), _maxabs(dYus)))
+        sn = max_abs(dx, *dYs, *dYus)
         finite = jnp.isfinite(m) & jnp.isfinite(sn)
         sx, sY, sYu, _ = _direction(sy, pieces, c["jac"])
-        ss = jnp.maximum(jnp.max(jnp.abs(sx)), jnp.maximum(_maxabs(sY), _maxabs(sYu)))
-        free = (c["it"] < _FREE_STEPS) & (t == 1.0) & (m <= 1e6 * c["m"])
-        ok = first | (finite & (free | (m <= (1.0 - 1e-4 * t) * c["m"])
-                                | (ss <= (1.0 - 0.25 * t) * c["sn"])))
-        dYs = [_cap(d, cap) for d, cap in zip(dYs, caps)]
-        dYus = [_cap(d, cap) if bk.defect else jnp.zeros_like(y)
+        ss = max_abs(sx, *sY, *sYu)
+        ok = accept_step(c, first, finite, t, m, ss)
+        dYs = [cap_step(d, cap) for d, cap in zip(dYs, caps)]
+        dYus = [cap_step(d, cap) if bk.defect else jnp.zeros_like(y)
                 for d, cap, bk, y in zip(dYus, caps, groups, Ys)]
-        new = dict(xz=xz, Y=Ys, Yu=Yus, dx=_cap(dx, _RING_CAP), dY=dYs, dYu=dYus, m=m, sn=sn,
+        new = dict(xz=xz, Y=Ys, Yu=Yus, dx=cap_step(dx, RING_CAP), dY=dYs, dYu=dYus, m=m, sn=sn,
                    jac=jacs)
         out = jax.tree_util.tree_map(lambda u, v: jnp.where(ok, u, v), new, {k: c[k] for k in new})
-        return newton_step_status(out, c, ok, t, first, finite, tol, maxit, _LS_STEPS)
+        return step_status(out, c, ok, t, first, finite, tol, maxit)
 
     init = dict(xz=xz0, Y=list(Y0), Yu=list(Yu0), dx=jnp.zeros_like(xz0),
                 dY=[jnp.zeros_like(y) for y in Y0], dYu=[jnp.zeros_like(y) for y in Y0],
@@ -908,17 +886,13 @@ def raise_for_set(sol: SetSolution, what: str = "set solve"):
     raise_for(sol, what, in_set=True)
 
 
-def _traced(maxit, rtol, atol):
-    return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
-
-
 def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
               speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
               hertz_method: str = "exact", offsets=None, throw: bool = True) -> SetSolution:
     """Solve the set for one load case (see :func:`solve_set_state`); a failed solve is retried
     once with 8 speed steps; ``throw=True`` raises for a failed one."""
     loads = jnp.asarray(loads, jnp.float64)
-    maxit, rtol, atol = _traced(maxit, rtol, atol)
+    maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     kw = dict(cage_angle=jnp.asarray(cage_angle, jnp.float64), spalls=spalls, maxit=maxit,
               rtol=rtol, atol=atol, hertz_method=hertz_method, offsets=offsets)
     sol = _solve_jit(bset, op, loads, speed_steps=speed_steps, **kw)
@@ -1001,7 +975,7 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     Z = per_item(positions, bset.positions)
     SP = per_item(springs, bset.springs)
     e = None if offsets is None else per_item(offsets, None)
-    maxit, rtol, atol = _traced(maxit, rtol, atol)
+    maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
 
     def run(sel, steps):
         o = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
@@ -1010,19 +984,8 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
                                 SP[sel], steps, maxit, rtol, atol, hertz_method, None if e is None else e[sel])
 
     sol = run(jnp.arange(n), speed_steps)
-    bad = np.flatnonzero(np.asarray(sol.result) != 0)
-    if bad.size and speed_steps < 8:
-        n_pad = 1 << int(np.ceil(np.log2(bad.size)))
-        pidx = jnp.asarray(np.concatenate([bad, np.full(n_pad - bad.size, bad[0])]))
-        retry = jax.tree_util.tree_map(lambda r: r[:bad.size], run(pidx, 8))
-        take = jnp.asarray(np.asarray(retry.result) == 0)
-        idx = jnp.asarray(bad)
-
-        def merge(a, r):
-            m = take.reshape(take.shape + (1,) * (r.ndim - 1))
-            return a.at[idx].set(jnp.where(m, r, a[idx]))
-
-        sol = jax.tree_util.tree_map(merge, sol, retry)
+    if speed_steps < 8:     # the failed items again with 8 speed steps (only them)
+        sol = retry_failed(sol, lambda idx: run(idx, 8), converged_only)
     if throw:
         raise_for_set(sol, "set batch solve")
     return sol

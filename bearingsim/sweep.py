@@ -28,6 +28,8 @@ import numpy as np
 from .hertz import stiffness_curve
 from .defect import Spall, as_defects, canonical_defects, contact_depths
 from .jones import JonesSolution, raise_for, solve, solve_state
+from .names import noun_module
+from .newton import retry_failed, traced_tolerances
 from .xla import jit
 
 __all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "defect_occupancy", "representatives",
@@ -158,10 +160,6 @@ def _sweep_cold(bearing, op, loads, spall, angles, maxit, rtol, atol, hertz_meth
 _sweep_cold_jit = jit(_sweep_cold)
 
 
-def _tolerances(maxit, rtol, atol):
-    return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
-
-
 def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, steps=181,
           resolve_edges=True, maxit=60, rtol=1e-11, atol=1e-9,
           hertz_method="exact", throw=False, centers=None, which=0) -> JonesSolution:
@@ -188,7 +186,7 @@ def sweep(bearing, op, loads, spall=None, *, angles=None, start=0.0, stop=None, 
 def _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, hertz_method):
     """The sweep over (cage angle, defect centre) pairs: angles (N,), centers (N,) or None."""
     loads = jnp.asarray(loads, jnp.float64)
-    tol = _tolerances(maxit, rtol, atol)
+    tol = traced_tolerances(maxit, rtol, atol)
     kw = dict(maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, throw=False)
     spall = canonical_defects(spall)
     at = (lambda k: spall) if centers is None else (lambda k: _with_center(spall, which, centers[k]))
@@ -202,19 +200,15 @@ def _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, h
     start = jax.tree_util.tree_map(lambda *a: jnp.stack(a)[jnp.asarray(run)], *[
         (r.displacement, r.ball_position, r.undropped_position) for r in rep_sols])
     sol = _sweep_warm_jit(bearing, op, loads, spall, angles, *start, *tol, hertz_method, **extra)
-    bad = np.flatnonzero((np.asarray(sol.result) != 0) | ~ok_rep[run])
-    if bad.size:
-        # pad to a power of two: one compiled shape for any number of failures
-        n = 1 << int(np.ceil(np.log2(bad.size)))
-        idx = np.concatenate([bad, np.full(n - bad.size, bad[0])])
-        if centers is not None:
-            extra = dict(centers=centers[idx], which=which)
-        redo = _sweep_cold_jit(bearing, op, loads, spall, angles[idx], *tol, hertz_method, **extra)
-        redo = jax.tree_util.tree_map(lambda r: r[:bad.size], redo)
-        ok = (np.asarray(redo.result) == 0) | (np.asarray(sol.result)[bad] != 0)
-        take = jnp.asarray(bad[ok])
-        sol = jax.tree_util.tree_map(lambda a, r: a.at[take].set(r[jnp.asarray(ok)]), sol, redo)
-    return sol
+    # the failed angles (and those whose run's cold solve failed) again from cold starts; a redo
+    # replaces a failed angle, or a converged one only when it converged too
+    bad = (np.asarray(sol.result) != 0) | ~ok_rep[run]
+
+    def redo(idx):
+        ex = extra if centers is None else dict(centers=centers[idx], which=which)
+        return _sweep_cold_jit(bearing, op, loads, spall, angles[idx], *tol, hertz_method, **ex)
+
+    return retry_failed(sol, redo, lambda r, first: (r == 0) | (first != 0), bad=bad)
 
 
 def defect_centre_edges(bearing, spall, start, stop, cage_angle=0.0, which=0):
@@ -286,3 +280,8 @@ def sweep_chunked(bearing, op, loads, spall, angles, chunk=256, progress=None, *
         if progress is not None:
             progress(len(part))
     return jax.tree_util.tree_map(lambda *a: jnp.concatenate(a, axis=0), *parts)
+
+
+
+# ``bearingsim.sweep(...)`` calls :func:`sweep` (the package exports this module as its noun)
+noun_module(__name__, "sweep")

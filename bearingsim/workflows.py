@@ -7,10 +7,11 @@ sweep grid, dynamics settings), so Python and the command line give the same num
 ============================ =========================================== ======================
 function                     result                                      command
 ============================ =========================================== ======================
-:func:`solve_case`           ``JonesSolution``                           ``bearingsim static``
+:func:`solve_case`           ``JonesSolution`` (a set: ``SetSolution``)  ``bearingsim static``
 :func:`assess_case`          :class:`Assessment` (limits, life)          ``bearingsim static``
 :func:`sweep_case`           ``JonesSolution`` with a leading (N,) axis  ``bearingsim sweep``
-:func:`study_case`           :class:`Study` (solution (M, N))            ``bearingsim study``
+:func:`study_case`           :class:`Study` (solution (M, N); a set:     ``bearingsim study``
+                             ``SetStudy``)
 :func:`simulate_case`        ``DynamicsResult``                          ``bearingsim simulate``
 :func:`compare_case`         :class:`Comparison`                         ``bearingsim compare``
 :func:`dataset_case`         ``DatasetSummary`` (file written)           ``bearingsim dataset``
@@ -18,11 +19,19 @@ function                     result                                      command
 :func:`calibrate_case`       ``MachineCalibration`` (spec written)       ``bearingsim calibrate``
 ============================ =========================================== ======================
 
+A case with a ``[set]`` section (a shaft on several bearings) goes through the same entries:
+:func:`solve_case` and :func:`study_case` dispatch on the case, and the command entries
+:func:`info_text`, :func:`static_command` and :func:`study_command` do a command's whole work
+(solve, text, files, figures) for a single bearing or a set alike, so the command line has no
+set branch.
+
 Errors are the classes of :mod:`bearingsim.errors`: bad input raises ``InputError``; with
 ``throw=True`` (the default) a failed solve raises ``NotConvergedError`` naming the case file,
 with ``throw=False`` the result is returned with its codes (per item for batches).  Nothing here
-prints, writes files (except :func:`dataset_case` and :func:`calibrate_case`, whose result is the
-file) or draws.
+prints, writes files or draws, except :func:`dataset_case` and :func:`calibrate_case` (whose result
+is the file) and the command entries (which say their lines through ``say`` and write the files
+they are given, through :mod:`bearingsim.io`, :mod:`bearingsim.report`, :mod:`bearingsim.plots`
+and :mod:`bearingsim.sets`).
 """
 from __future__ import annotations
 
@@ -35,7 +44,7 @@ from .case import check_sampling, unit_of
 from .case.units import from_si
 from .errors import InputError, NotConvergedError
 
-__all__ = ["solve_case", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
+__all__ = ["solve_case", "info_text", "static_command", "study_command", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
            "spectrum_file", "calibrate_case", "envelope_band", "simulation_spectrum", "Study", "Comparison",
            "EnvelopeAnalysis", "STUDY_CHUNK"]
 
@@ -64,10 +73,16 @@ def _check(sol, case, what, throw):
 
 # ------------------------------------------------------------------------------------ solve
 def solve_case(case, *, throw=True):
-    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``).  The verdict is
-    the core's (:func:`bearingsim.jones.solve`: a loaded contact centred at or beyond a shoulder
-    edge is result 8, or 7 at an angular contact bearing's low edge, healthy or with a defect);
-    nothing is decided here."""
+    """The quasi-static state of ``case`` at its cage angle (``bearingsim static``): a
+    ``JonesSolution``, or for a case with a ``[set]`` section the set's ``SetSolution``
+    (:func:`bearingsim.sets.solve_set_case`).  The verdict is the core's
+    (:func:`bearingsim.jones.solve`: a loaded contact centred at or beyond a shoulder edge is
+    result 8, or 7 at an angular contact bearing's low edge, healthy or with a defect; a set's
+    bearings are checked by the same rule); nothing is decided here."""
+    if case.is_set:
+        from .sets import solve_set_case
+
+        return solve_set_case(case, throw=throw)
     import bearingsim as bs
 
     b, op, spall = case.bearing(), case.operation(), case.spall()
@@ -244,7 +259,15 @@ def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     task, with the same numbers (a batched study stays in this process: it is one vmapped solve
     already, docs/scale.md).  Raises InputError
     without ``[study]`` or for a key that changes the shape of the results (``bearing.balls``,
-    ``sweep.steps``)."""
+    ``sweep.steps``).
+
+    A case with a ``[set]`` section: the set's state per value
+    (:func:`bearingsim.sets.study_set_case` -> ``SetStudy``; one batched solve, in this process:
+    ``progress`` and ``runner`` do not apply)."""
+    if case.is_set:
+        from .sets import study_set_case
+
+        return study_set_case(case, throw=throw)
     import jax
 
     spec = case.study_settings()
@@ -295,6 +318,126 @@ def _replace_row(sol, m, row):
     import jax
 
     return jax.tree_util.tree_map(lambda a, r: a.at[m].set(r), sol, row)
+
+
+# ----------------------------------------------------- commands: a single bearing or a set
+# One entry per command that reads a case which may describe one bearing or a set: the case
+# decides, so the command line (and a notebook that wants the command's outputs) has no set
+# branch.  ``say`` receives each line the command prints (the text, then "wrote PATH" per file).
+def _plot_dir(path):
+    from pathlib import Path
+
+    d = Path(path)
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def info_text(case) -> str:
+    """The text of ``bearingsim info``: the case's inputs and derived quantities, and for a set its
+    bearings (positions, facings, preloads)."""
+    from .report import info_text as bearing_info
+
+    text = bearing_info(case)
+    if case.is_set:
+        from .sets import set_info_text
+
+        text += "\n" + set_info_text(case)
+    return text
+
+
+def static_command(case, json_path=None, plot_path=None, *, say=print):
+    """``bearingsim static``: the state of ``case`` (:func:`solve_case`: a single bearing or a set),
+    its text said, its JSON record written to ``json_path`` and its polar plot to ``plot_path``
+    (each None: not written).  Raises as :func:`solve_case` with ``throw=True``.  Returns the
+    solution."""
+    from pathlib import Path
+
+    from . import io
+
+    sol = solve_case(case)
+    if case.is_set:
+        from . import sets
+
+        say(sets.set_text(case, sol))
+        if json_path:
+            io.write_json(json_path, sets.set_to_dict(case, sol))
+            say(f"wrote {json_path}")
+        if plot_path:
+            sets.plot_set_static(sol, title=case.title, path=plot_path)
+            say(f"wrote {plot_path}")
+        return sol
+    from .report import static_text
+
+    assessment = assess_case(case, sol)
+    say(static_text(case, sol, assessment))
+    if json_path:
+        io.write_static(json_path, sol, assessment)
+        say("")
+        say(f"wrote {json_path}")
+    if plot_path:
+        from .plots import plot_static
+
+        Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
+        plot_static(sol, title=case.title, spall=case.spall(), path=plot_path)
+        say(f"wrote {plot_path}")
+    return sol
+
+
+def study_command(case, output, plot_dir=None, *, workers=None, scheduler=None, progress=True, say=print,
+                  warn=None):
+    """``bearingsim study``: the study of ``case`` (:func:`study_case`, ``throw=False``: a single
+    bearing's sweeps, or a set's states) written to ``output`` (HDF5; a set's table also as CSV
+    beside it), its text said, its figures drawn into ``plot_dir`` (None: none).  ``workers`` /
+    ``scheduler``: the single-bearing sweeps on a Dask cluster (a set's study is one batched solve
+    in this process).  ``warn(codes, what)`` receives the result codes (failed states are
+    returned flagged, not raised).  Returns the study."""
+    from pathlib import Path
+
+    if case.is_set:
+        from . import sets
+
+        study = study_case(case, throw=False)
+        if warn:
+            warn(study.solution.result, "study states")
+        table = sets.set_study_table(case, study)
+        sets.write_set_study(output, case, study, table)
+        csv = Path(output).with_suffix(".csv")
+        sets.write_set_study_csv(csv, case, study, table)
+        say(sets.set_study_text(case, study))
+        say(f"wrote {output}")
+        say(f"wrote {csv}")
+        if plot_dir:
+            name = study.parameter.replace(".", "_") + ".png"
+            p = _plot_dir(plot_dir) / ("study_set_" + name)
+            sets.plot_set_study(study, title=case.title, path=p, table=table)
+            say(f"wrote {p}")
+            p = _plot_dir(plot_dir) / ("limits_set_" + name)
+            sets.plot_set_limits(case, study, title=case.title, path=p)
+            say(f"wrote {p}")
+        return study
+    from . import io
+    from .report import study_text
+
+    if workers is None and scheduler is None:
+        study = study_case(case, throw=False, progress=progress)
+    else:
+        from .distributed import DaskRunner
+
+        with DaskRunner(workers=workers, scheduler=scheduler) as runner:
+            study = study_case(case, throw=False, progress=progress, runner=runner)
+    if warn:
+        warn(study.solution.result, "study states")
+    io.write_study(output, case, study)
+    say(study_text(case, study))
+    say(f"wrote {output}")
+    if plot_dir:
+        from .plots import plot_study
+
+        p = _plot_dir(plot_dir) / ("study_" + study.parameter.replace(".", "_") + ".png")
+        plot_study(study.solution, study.values, study.parameter, study.unit, title=case.title,
+                   spall=case.spall(), path=p)
+        say(f"wrote {p}")
+    return study
 
 
 # ------------------------------------------------------------------------------- dynamics

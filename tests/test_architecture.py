@@ -16,7 +16,7 @@ EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "r
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
         "pit", "passes", "features", "background", "life", "limits", "background_fit", "shaft",
-        "signal_stage", "nuisance", "fault_size", "names", "keys"}
+        "signal_stage", "nuisance", "fault_size", "names", "newton", "keys"}
 INFRASTRUCTURE = {"__init__", "_version", "runtime"}
 
 
@@ -163,3 +163,25 @@ def test_the_dataset_package_shows_the_flow():
         later = {f"bearingsim.dataset.{n}" for n in DATASET_FLOW[k + 1:]}
         bad = [t for _, t, _ in imports(p, dotted(p)) if t in later]
         assert not bad, f"dataset/{name}.py imports a later stage: {bad}"
+
+
+def test_the_command_line_has_no_set_branch():
+    """Sets go through bearingsim.workflows like single bearings (issue 27 item 7): the workflow
+    entries dispatch on the case, so cli.py neither asks whether a case is a set nor imports the
+    set edge module."""
+    path = PACKAGE / "cli.py"
+    src = path.read_text(encoding="utf-8")
+    assert "is_set" not in src
+    assert not [t for _, t, _ in imports(path, "bearingsim.cli") if t == "bearingsim.sets"]
+
+
+def test_the_newton_machinery_lives_in_one_module():
+    """The damped Newton's constants, step cap, step status and batch retry are defined once, in
+    bearingsim.newton, below jones and shaft (issue 27 item 7)."""
+    shared = ("_LS_STEPS", "_FREE_STEPS", "_RING_CAP", "_BALL_CAP", "def _cap(", "def newton_step_status(",
+              "n_pad = 1 <<", "def _traced(", "def _tolerances(")
+    found = [f"{p.relative_to(ROOT)}: {s}" for p in sources() if p.name != "newton.py"
+             for s in shared if s in p.read_text(encoding="utf-8")]
+    assert not found, "\n".join(found)
+    for user in ("jones", "shaft"):
+        assert ("bearingsim.newton" in {t for _, t, _ in imports(PACKAGE / f"{user}.py", f"bearingsim.{user}")})

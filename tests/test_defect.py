@@ -108,10 +108,13 @@ def test_solution_is_differentiable_wrt_spall_depth(b218):
 
 # ------------------------------------------------------------------------------ seed findings
 def test_seed_findings_speed(b218):
-    """Q_o - Q_i grows with speed; alpha_o falls and alpha_i rises (ball in the load zone)."""
+    """Q_o - Q_i grows with speed; alpha_o falls and alpha_i rises (ball in the load zone).
+    Up to 10 krpm: from ~12 krpm the lightly loaded balls' inner contacts of the 218 under these
+    loads climb past its 74.1 deg high shoulder (healthy too: 77 deg at 15 krpm), which the core
+    refuses (result 8, issue 27)."""
     sp = bs.Spall(0.0, 3 * DEG, 0.3e-3, "rectangular")
     out = []
-    for rpm in (0.0, 5000.0, 10000.0, 15000.0):
+    for rpm in (0.0, 3500.0, 7000.0, 10000.0):
         s = bs.solve(b218, bs.Operation.from_rpm(rpm), LOADS, spall=sp)
         out.append((float(s.Q_outer[1] - s.Q_inner[1]), float(s.alpha_outer[1]), float(s.alpha_inner[1])))
     d, ao, ai = np.array(out).T

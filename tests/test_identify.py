@@ -126,10 +126,12 @@ def test_bad_records_exit_2_with_one_message(tmp_path, capsys, what, x, fs, need
     assert not out.exists()
 
 
-def test_missing_file_and_directory_outputs_exit_2(tmp_path, capsys):
+def test_missing_file_exit_2_and_directory_output_exit_4(tmp_path, capsys):
+    """A missing record is bad input (2); an output that names a directory cannot be written (4,
+    the one rule of budget.check_output, issue 27)."""
     assert cli.main(["identify", str(tmp_path / "none.npz"), "--case", SPEC]) == 2
     p = _write(tmp_path, "ok.npz", np.random.default_rng(0).standard_normal(24000), 12000.0)
-    assert cli.main(["identify", str(p), "--case", SPEC, "--json", str(tmp_path)]) == 2
+    assert cli.main(["identify", str(p), "--case", SPEC, "--json", str(tmp_path)]) == 4
     assert "is a directory" in capsys.readouterr().err
 
 

@@ -77,6 +77,29 @@ def test_import_and_help_load_no_jax(tmp_path):
     assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["solve", "load_dataset"]
 
 
+#: the nouns a user types (issue 27 item 7)
+NOUNS = ("solve", "solve_batch", "solve_set", "sweep", "simulate", "load_case", "solve_case", "study_case",
+         "make_dataset", "load_dataset", "identify", "Bearing", "BearingSet", "Operation", "Spall")
+
+
+def test_every_exported_noun_resolves_lazily(tmp_path):
+    """Each name of ``bearingsim.__all__`` resolves at first use, after an import that loaded no
+    JAX, and the nouns a user types are bearingsim's objects of that name (the function or class,
+    or for ``sweep`` and ``identify`` the module that calls it: Python rebinds ``bearingsim.sweep``
+    to the submodule whenever it is imported, so the submodule-first order is checked too)."""
+    code = ("import sys, bearingsim; before = 'jax' in sys.modules; "
+            "missing = [n for n in bearingsim.__all__ if getattr(bearingsim, n, None) is None]; "
+            "import bearingsim.sweep as sw, bearingsim.identify as idm; "
+            "print(before, missing, sw is bearingsim.sweep, callable(bearingsim.sweep), "
+            "callable(bearingsim.identify), set(bearingsim.__all__) <= set(dir(bearingsim)))")
+    assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["False", "[]"] + ["True"] * 4
+    code = "import bearingsim.sweep, bearingsim; print(callable(bearingsim.sweep), bearingsim.sweep.sweep.__module__)"
+    assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["True", "bearingsim.sweep"]
+    code = ("import bearingsim; print(*[(o.__name__.split('.')[-1], o.__module__.split('.')[0]) == (n, 'bearingsim') "
+            f"for n, o in ((n, getattr(bearingsim, n)) for n in {NOUNS!r})])")
+    assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["True"] * len(NOUNS)
+
+
 def test_cold_cache_is_said_and_counted(tmp_path, monkeypatch):
     from bearingsim import budget
     from bearingsim.case import load_case

@@ -155,3 +155,21 @@ def test_envelope_band_around_the_resonance():
     assert workflows.envelope_band(48000.0, 3000.0) == pytest.approx((2625.0, 3375.0))
     lo, hi = workflows.envelope_band(4000.0, 3000.0)          # resonance above 0.45 fs: clipped
     assert lo == pytest.approx(1800.0 * 0.875) and hi < 2000.0
+
+
+def test_a_set_case_goes_through_the_same_workflows():
+    """A case with [set] takes the single-bearing entries (issue 27 item 7): solve_case returns the
+    set's state (the same as the set workflow's), info_text adds the set's bearings, and
+    static_command says the set's text (no JSON or plot asked: nothing else)."""
+    from bearingsim import sets
+    from bearingsim.case import load_case
+    from bearingsim.shaft import SetSolution
+
+    case = load_case("harris218_db_medium")
+    sol = workflows.solve_case(case)
+    assert isinstance(sol, SetSolution) and int(sol.result) == 0
+    np.testing.assert_array_equal(np.asarray(sol.displacement), np.asarray(sets.solve_set_case(case).displacement))
+    assert workflows.info_text(case).endswith(sets.set_info_text(case))
+    said = []
+    workflows.static_command(case, say=said.append)
+    assert said == [sets.set_text(case, sol)]

@@ -20,6 +20,7 @@ from ..errors import InputError
 from ..hertz import stiffness_curve
 from ..jones import solve, solve_state
 from ..kinematics import Operation
+from ..newton import converged_only, retry_failed
 from ..xla import jit
 from .ball_force import ITER_CHOICES, choose_ball_iterations, next_iterations
 from .integrate import check_scheme, run_fixed, time_grid
@@ -104,19 +105,11 @@ def quasi_static_batch(bearing, op, loads, theta0, defects, hertz_method="exact"
     (same shapes, same program: a healthy solve of a data set's items with depth-0 slots costs no
     compilation)."""
     sols = _qs_batch_jit(bearing, op, loads, theta0, defects, hertz_method, 1)
-    bad = np.flatnonzero(np.asarray(sols.result) != 0)
-    if bad.size:    # retry those with 8 speed stages (only them)
-        idx = jnp.asarray(bad)
-        retry = _qs_batch_jit(bearing, _take(op, idx), loads[idx], theta0[idx], _take(defects, idx),
-                              hertz_method, 8)
-        take = jnp.asarray(np.asarray(retry.result) == 0)
+    # retry the failed items with 8 speed stages (only them; padded: one compiled retry shape)
+    return retry_failed(sols, lambda idx: _qs_batch_jit(bearing, _take(op, idx), loads[idx], theta0[idx],
+                                                       _take(defects, idx), hertz_method, 8), converged_only)
 
-        def merge(a, r):
-            mk = take.reshape(take.shape + (1,) * (r.ndim - 1))
-            return a.at[idx].set(jnp.where(mk, r, a[idx]))
 
-        sols = jax.tree_util.tree_map(merge, sols, retry)
-    return sols
 _init_batch_jit = jit(jax.vmap(initial_state))
 
 

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
+from conftest import beyond_high_shoulder
 
 _REF_PATH = pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "reference_scipy.py"
 _spec = importlib.util.spec_from_file_location("reference_scipy", _REF_PATH)
@@ -99,7 +100,7 @@ def _solve_bearingsim(geom, kw):
     loads = bs.Loads(axial=Fz, radial_x=Fx, radial_y=Fy, moment_x=Mx, moment_y=My)
     sp = kw.get("spall")
     spall = None if sp is None else bs.Spall(sp["center"], sp["extent"], sp["depth"], sp["profile"])
-    return bs.solve(_bearing(geom), op, loads, cage_angle=kw.get("cage_angle", 0.0), spall=spall)
+    return bs.solve(_bearing(geom), op, loads, cage_angle=kw.get("cage_angle", 0.0), spall=spall, throw=False)
 
 
 def _scaled_q(q, geom):
@@ -112,7 +113,13 @@ def _compare(name, geom, kw):
     r = ref.solve(geom, **kw)
     assert r["converged"], f"reference did not converge (residual {r['residual']:.3e} N)"
     sol = _solve_bearingsim(geom, kw)
-    assert int(sol.result) == 0, f"bearingsim result {int(sol.result)}"
+    # the numbers are compared whatever the verdict; a state the core refuses as over the high
+    # shoulder (8, issue 27: the reference knows no shoulders) must be confirmed by its own angles
+    code = int(sol.result)
+    if code == 8:
+        assert beyond_high_shoulder(_bearing(geom), sol), "refused as over the shoulder, but no contact is"
+    else:
+        assert code == 0, f"bearingsim result {code}"
 
     ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
     Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
