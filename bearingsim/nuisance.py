@@ -45,19 +45,18 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
     The fault's RMS over the background's, ``fault_snr_dB`` (down to negative dB), as the gain of
     the fault signal.
 
-Inside the data engine's chunk program (per item, vmapped): ``key = item_key(seed, index)``;
-``record, labels = item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz,
-bpfo_hz, bpfi_hz, bsf_hz, settings)`` with ``fault`` the item's bearing signal after the sensor
-path (any level: the gain is set here), ``background`` its background record (the same length),
-the frequencies of the item (labels ``shaft_Hz``, ``ftf_Hz``, ``bpfo_Hz``, ``bpfi_Hz``,
-``bsf_Hz``), ``settings`` one static dict for the whole data set (``fault_snr_dB`` from the spec;
-the switches of :data:`INGREDIENTS`).  Until the engine does so, ``bearingsim.transfer.
-composed_dataset`` applies it after the engine (same function, same keys).
+Inside the data engine (per item, vmapped): :func:`bearingsim.signal_stage.finish_item` applies
+the ingredients named by ``[dataset] realism_ingredients`` in the order of :func:`item_signal`,
+each from the item key's ``nuisance`` stream (:data:`bearingsim.keys.STREAMS`), with the item's
+frequencies from the chunk program; :func:`item_signal` is the same composition for one item
+given its parts (tests, notebooks).
 """
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+
+from .keys import STREAMS, item_keys
 
 __all__ = ["NUISANCE_DEFAULTS", "INGREDIENTS", "item_signal", "ball_fault_modulation", "shaft_modulation", "nuisance_signal", "fault_level",
            "load_zone_factor", "band_noise", "item_key", "settings_of"]
@@ -116,9 +115,10 @@ def settings_of(settings=None) -> dict:
 
 
 def item_key(seed, index):
-    """The key of item ``index`` of a data set seeded ``seed`` (jax.random.fold_in twice, with the
-    stream number 26 between: independent of any other stream of the same seed)."""
-    return jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(seed), 26), index)
+    """The nuisance stream of item ``index`` of a data set seeded ``seed``: the item's key
+    (:func:`bearingsim.keys.item_keys`) folded with ``STREAMS["nuisance"]``, independent of every
+    other stream of the item (:data:`bearingsim.keys.STREAMS`)."""
+    return jax.random.fold_in(item_keys(seed, jnp.reshape(index, (1,)))[0], STREAMS["nuisance"])
 
 
 def _u(key, r):

@@ -18,14 +18,19 @@ What it does to one item (the order of :func:`finish_items`):
    :attr:`SignalSettings.knock_max`);
 4. the fault level (:func:`fault_level`): the record is ``gain a + background``, ``gain`` the
    item's drawn signal gain or, with a target ratio, ``10^(snr/20) rms(background) / rms(a)``
-   for a fault class (label ``snr_dB``).
+   for a fault class (label ``snr_dB``);
+5. issue 26's ingredients where :attr:`SignalSettings.ingredients` names them
+   (:mod:`bearingsim.nuisance`, from the item key's ``nuisance`` stream): a ball item's fault
+   part re-shaped as real damaged balls show it (before the noise and the fault level), the
+   additive nuisance at the background's RMS (after it), the whole record modulated at shaft
+   orders (last).
 
 :func:`draw_items` gives the per-item domain-randomisation draws the dynamics needs first
 (sensor modes, signal gain, target SNR, strike probability, outer-pit position).
 
 Random streams: every draw comes from ``jax.random.fold_in(key, STREAMS[name])`` of the item's
 key (:func:`item_keys`), so an item does not depend on its chunk, the chunk size or the device
-count.  Stream numbers below 100 other than those here are left to the motion (slip, speed).
+count.  The stream numbers are those of :data:`bearingsim.keys.STREAMS` (one registry).
 The draws are not NumPy's: a data set made this way is a new version of the random streams.
 
 :class:`SignalSettings` holds everything static (hashable: a compiled program per settings and
@@ -40,7 +45,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import keys as _keys
+from . import nuisance as _nuisance
 from .background import BACKGROUND_DEFAULTS, Background
+from .keys import item_keys, stream_key
 from .sensor import SensorFilter, filter_init, filter_output, filter_update
 from .xla import jit
 
@@ -51,8 +59,8 @@ __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_ke
            "vary_passes", "discretise_modes", "run_modes", "measurement_noise", "fault_level", "finish_item",
            "finish_items", "LABELS"]
 
-#: the item key's sub-streams (``jax.random.fold_in(key, n)``) this module draws from
-STREAMS = {"noise": 3, "passes": 9, "strike": 10, "background": 11, "randomisation": 1001, "transfer": 1002}
+#: the item key's sub-streams (``jax.random.fold_in(key, n)``): the one registry, :data:`bearingsim.keys.STREAMS`
+STREAMS = _keys.STREAMS
 
 #: label fields :func:`finish_items` returns, each (N,)
 LABELS = ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent",
@@ -95,12 +103,17 @@ class SignalSettings:
     resonance_frequency_Hz: tuple | None = None
     resonance_damping_ratio: tuple | None = None
     resonance_gain: tuple | None = None
+    ingredients: tuple = ()                  # issue 26's ingredients on (names of bearingsim.nuisance.INGREDIENTS)
+    nuisance: tuple = ()                     # (key, value) overrides of bearingsim.nuisance.NUISANCE_DEFAULTS
 
     def __post_init__(self):
         for name in self.__dataclass_fields__:
             object.__setattr__(self, name, _hashable(getattr(self, name)))
         if self.background not in ("none", "random", "machine"):
             raise ValueError(f"background must be 'none', 'random' or 'machine', got {self.background!r}")
+        bad = [k for k in self.ingredients if k not in _nuisance.INGREDIENTS]
+        if bad:
+            raise ValueError(f"unknown realism ingredient {bad[0]!r}: one of {', '.join(_nuisance.INGREDIENTS)}")
         if self.background == "machine" and self.machine is None:
             raise ValueError("background 'machine' needs the machine's Background")
 
@@ -123,7 +136,8 @@ class SignalSettings:
                    strike_probability=ds.get("ball_strike_probability", (1.0, 1.0)),
                    outer_positions_deg=ds.get("outer_center_positions_deg") or (), modes=(f, z, g),
                    resonance_frequency_Hz=ds.get("resonance_frequency_Hz"),
-                   resonance_damping_ratio=ds.get("resonance_damping_ratio"), resonance_gain=ds.get("resonance_gain"))
+                   resonance_damping_ratio=ds.get("resonance_damping_ratio"), resonance_gain=ds.get("resonance_gain"),
+                   ingredients=tuple(k for k in _nuisance.INGREDIENTS if k in (ds.get("realism_ingredients") or ())))
 
     @property
     def ranges(self) -> dict:
@@ -139,17 +153,6 @@ class SignalSettings:
         rate = float(Background(*self.machine).knock_rate) if machine else float(self.ranges["knock_rate_Hz"][1])
         lam = rate * self.samples / self.fs
         return max(1, int(poisson.isf(KNOCK_TAIL, lam)) + 1) if lam > 0 else 1
-
-
-def item_keys(seed, index) -> jnp.ndarray:
-    """(N, 2) uint32 keys of items ``index`` of a run seeded ``seed``: ``fold_in(PRNGKey(seed), i)``."""
-    base = jax.random.PRNGKey(int(seed))
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.asarray(index, jnp.uint32))
-
-
-def stream_key(key, name):
-    """The item key's sub-stream ``name`` (:data:`STREAMS`)."""
-    return jax.random.fold_in(key, STREAMS[name])
 
 
 def _logu(key, lo, hi, shape=()):
@@ -561,8 +564,10 @@ def fault_level(a, background, gain, snr_dB, use_snr):
 
 
 def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
-                s: SignalSettings):
-    """One item's record and labels (see the module docstring; :func:`finish_items`)."""
+                s: SignalSettings, frequencies=None):
+    """One item's record and labels (see the module docstring; :func:`finish_items`).
+    ``frequencies``: the item's (FTF, BPFO, BPFI, BSF) in Hz (needed by issue 26's
+    ingredients, :attr:`SignalSettings.ingredients`)."""
     T = housing.shape[0]
     fs = s.fs
     P = pass_times.shape[0]
@@ -582,6 +587,15 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
         a = jnp.where((unbridged > 0.0) | (p < 1.0), y, sensor)
     else:
         a = sensor
+    on = set(s.ingredients)
+    if on:
+        ns = _nuisance.settings_of(dict(s.nuisance))
+        ftf, bpfo, bpfi, bsf = (jnp.zeros(()),) * 4 if frequencies is None else tuple(frequencies)
+        kn = jax.random.split(stream_key(key, "nuisance"), 3)
+    if "ball_fault_model" in on:     # a ball pit as real damaged balls show it (the fault part only)
+        xb, _ = _nuisance.ball_fault_modulation(kn[0], a - jnp.mean(a), fs, shaft_hz, ftf, jnp.where(bsf > 0, bsf, 1.0),
+                                                ns)
+        a = jnp.where(fault_class == 3, xb, a)
     if s.noise_rms > 0.0:
         a = a + measurement_noise(stream_key(key, "noise"), T, s.noise_rms, fs, s.noise_band)
     labels = {"pass_amplitude_cv_percent": 100.0 * cv, "pass_delay_sd_percent": 100.0 * jitter}
@@ -598,13 +612,18 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
         out, gain, snr = fault_level(a, x, draws.signal_gain, draws.snr_dB,
                                      (fault_class > 0) & (s.fault_snr_dB is not None))
         labels.update(background_labels(bg))
+        if "nuisance" in on:         # every class, at the background's RMS
+            out = out + _nuisance.nuisance_signal(kn[1], T, fs, shaft_hz, ftf, bpfo, bpfi, bsf,
+                                                  jnp.sqrt(jnp.mean(x * x)), ns)[0]
+    if "shaft_modulation" in on:     # the whole record (fault, background, nuisance)
+        out = _nuisance.shaft_modulation(kn[2], out, fs, shaft_hz, ns)[0]
     labels.update(signal_gain=gain, snr_dB=snr, finite=jnp.all(jnp.isfinite(out)))
     return out, labels
 
 
 @jit
 def finish_items(keys, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
-                 settings: SignalSettings):
+                 settings: SignalSettings, frequencies=None):
     """The stored records (N, T) and labels (dict of (N,) arrays, :data:`LABELS`) of N items, one
     compiled program: ``keys`` (N, 2) uint32 (:func:`item_keys`), the simulated ``housing``
     acceleration and ``sensor`` signal (N, T) m/s^2, ``pass_times`` (N, P) s of the item's
@@ -612,6 +631,15 @@ def finish_items(keys, housing, sensor, pass_times, unbridged, fault_class, shaf
     ``shaft_hz`` (N,), the items' :class:`ItemDraws` (:func:`draw_items`).  A row whose pit is
     not bridged (unbridged > 0) or strikes intermittently is varied pass by pass and put
     through its modes again; the others keep ``sensor``.  ``finite`` is False where the record
-    is not finite (the caller flags and zeroes it)."""
-    return jax.vmap(lambda *a: finish_item(*a, settings))(keys, housing, sensor, pass_times, unbridged,
-                                                          fault_class, shaft_hz, draws)
+    is not finite (the caller flags and zeroes it).  ``frequencies``: (N, 4) FTF, BPFO, BPFI,
+    BSF in Hz of every item (the chunk program's outputs), for issue 26's ingredients
+    (:attr:`SignalSettings.ingredients`: a ball item's fault part re-shaped by
+    :func:`bearingsim.nuisance.ball_fault_modulation` before the noise and the fault level; the
+    additive :func:`bearingsim.nuisance.nuisance_signal` at the background's RMS after it; the
+    whole record through :func:`bearingsim.nuisance.shaft_modulation` last, the order of
+    :func:`bearingsim.nuisance.item_signal`), each from the item key's ``nuisance`` stream."""
+    if frequencies is None:
+        return jax.vmap(lambda *a: finish_item(*a, settings))(keys, housing, sensor, pass_times, unbridged,
+                                                              fault_class, shaft_hz, draws)
+    return jax.vmap(lambda *a: finish_item(*a[:-1], settings, a[-1]))(keys, housing, sensor, pass_times, unbridged,
+                                                                       fault_class, shaft_hz, draws, frequencies)

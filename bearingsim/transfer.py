@@ -32,7 +32,7 @@ from .errors import InputError
 from .features import FEATURE_NAMES, FaultOrders, cut_windows, window_features
 
 __all__ = ["CLASSES", "REAL_RECORDS", "DEV_RECORDS", "DEV_GRADES", "CLASSIFIERS", "dev_records", "diagnosable",
-           "DevFigures", "dev_figures", "dev_text", "compose_dataset", "composed_dataset", "without_background", "TransferReport", "real_windows", "simulated_windows",
+           "DevFigures", "dev_figures", "dev_text", "composed_dataset", "TransferReport", "real_windows", "simulated_windows",
            "make_classifier", "evaluate", "transfer_benchmark", "transfer_text", "require_sklearn"]
 
 #: class names (index = fault_class of the data sets)
@@ -309,67 +309,13 @@ def transfer_text(reports) -> str:
     return "\n".join(out)
 
 
-def compose_dataset(spec, src, dst, ingredients, settings=None):
-    """Write ``dst``: the data set ``src`` (simulated without background) with every item
-    composed by :func:`bearingsim.nuisance.item_signal` (the spec's background, fault_snr_dB and
-    the ``ingredients`` switched on)."""
-    import h5py
-    import jax
-    import jax.numpy as jnp
-    import numpy as np
-
-    from . import nuisance as nu
-    from .dataset import item_background
-
-    ds = spec.data["dataset"]
-    with h5py.File(src, "r") as f:
-        X = np.asarray(f["signals"], float)
-        lab = np.asarray(f["labels"])
-        fs = float(f.attrs["sample_rate_Hz"])
-    draw = item_background(spec, ds, fs)
-    B = np.stack([draw(s, sh, X.shape[1])[0] for s, sh in zip(lab["realism_seed"], lab["speed_rpm"] / 60.0)])
-    sett = {k: k in ingredients for k in nu.INGREDIENTS}
-    sett["fault_snr_dB"] = tuple(ds.get("fault_snr_dB", nu.NUISANCE_DEFAULTS["fault_snr_dB"]))
-    sett.update(settings or {})
-    keys = jax.vmap(lambda i: nu.item_key(int(ds["seed"]), i))(jnp.asarray(lab["index"]))
-    f = jax.jit(jax.vmap(lambda k, x, b, c, *fr: nu.item_signal(k, x, b, c, fs, *fr, sett)[0]))
-    Y = np.asarray(f(keys, X, B, lab["fault_class"], lab["shaft_Hz"], lab["ftf_Hz"], lab["bpfo_Hz"],
-                     lab["bpfi_Hz"], lab["bsf_Hz"]))
-    with h5py.File(src, "r") as fi, h5py.File(dst, "w") as fo:
-        for k, v in fi.attrs.items():
-            fo.attrs[k] = v
-        fo["signals"] = np.where((lab["result"] == 0)[:, None], Y, 0.0).astype(np.float32)
-        fo["labels"] = lab
-
-
-def without_background(spec):
-    """The spec with ``[dataset] background = "none"`` and no ``fault_snr_dB`` (the composition
-    adds the background and sets the level)."""
-    import copy
-
-    from .case import case_from_dict
-
-    raw = copy.deepcopy(spec.raw)
-    raw["dataset"].pop("fault_snr_dB", None)
-    raw["dataset"]["background"] = "none"
-    return case_from_dict(raw, source=spec.source)
-
-
-def composed_dataset(spec, path, ingredients=None, settings=None):
+def composed_dataset(spec, path, ingredients=None):
     """Simulate the data set of ``spec`` into ``path`` with issue 26's ``ingredients`` (default:
-    every one of :data:`bearingsim.nuisance.INGREDIENTS`; ``()``: the spec as it is): the bearing
-    signals simulated without background, then every item composed by
-    :func:`bearingsim.nuisance.item_signal` (:func:`compose_dataset`).  Returns the data set's
-    summary."""
-    import tempfile
-
+    every one of :data:`bearingsim.nuisance.INGREDIENTS`; ``()``: none): the spec's ``[dataset]
+    realism_ingredients`` set to them, so the data engine builds each inside its device program
+    (:func:`bearingsim.signal_stage.finish_items`).  Returns the data set's summary."""
     from .nuisance import INGREDIENTS
     from .workflows import dataset_case
 
     ingredients = INGREDIENTS if ingredients is None else tuple(ingredients)
-    if not ingredients:
-        return dataset_case(spec, path)
-    with tempfile.TemporaryDirectory() as tmp:
-        s = dataset_case(without_background(spec), Path(tmp) / "clean.h5")
-        compose_dataset(spec, Path(tmp) / "clean.h5", path, ingredients, settings)
-    return s
+    return dataset_case(spec.with_value("dataset.realism_ingredients", list(ingredients)), path)

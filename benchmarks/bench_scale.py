@@ -107,7 +107,7 @@ def cheap_chunk(plan, k):
     T = int(round(plan.duration * plan.fs))
     z = np.zeros(idx.size)
     return dict(index=idx, signals=np.zeros((idx.size, T), np.float32), result=np.zeros(idx.size, np.int32),
-                **{{k: z for k in dsm.CHUNK_FIELDS if k != "result"}})
+                ball_iterations=np.ones(idx.size, np.int32), **{{k: z for k in dsm.CHUNK_FIELDS if k != "result"}})
 
 class Cheap:
     def __init__(self, r): self.r = r
@@ -116,7 +116,7 @@ class Cheap:
         return self.r.imap(fn, shared, items)
 
 if __name__ == "__main__":
-    dsm.runner.run_settings = lambda *a: (2, 1)
+    dsm.runner.run_settings = lambda *a: 1
     case = load_case("{SPEC}").with_value("dataset.count", {n})
     t0 = time.perf_counter()
     with DaskRunner(workers=2) as r:

@@ -16,7 +16,7 @@ EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "r
 #: the core modules the architecture names (a new module is core unless listed in EDGE)
 CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
         "pit", "passes", "features", "background", "life", "limits", "background_fit", "shaft",
-        "signal_stage", "nuisance", "fault_size", "names", "newton"}
+        "signal_stage", "nuisance", "fault_size", "names", "newton", "keys"}
 INFRASTRUCTURE = {"__init__", "_version", "runtime"}
 
 

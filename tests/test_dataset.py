@@ -156,22 +156,29 @@ def test_shipped_spec_is_valid():
 
 def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
     """A failed item (result != 0) or a non-finite signal is written as zeros with result != 0."""
+    import jax.numpy as jnp
+
     import bearingsim.dataset as dsm
     import bearingsim.dynamics as dyn
 
-    def fake_batch(bearing, speed_rpm, loads, *a, **kw):
-        n = len(speed_rpm)
-        x = np.ones((n, 480))
-        x[0, 5] = np.nan                       # item in the first slot: non-finite signal
-        code = np.zeros(n, int)
-        code[1] = 1                            # second slot: max steps reached
-        x[1] = np.nan
-        return dyn.DynamicsBatchResult(np.arange(480) / 24000.0, x, None, code, np.zeros(n),
-                                       np.full(n, 10.0), np.full(n, np.nan),
-                                       [{"pass_jitter_percent": 0.0}] * n)
+    class FakeProgram:
+        calls = 0
 
-    monkeypatch.setattr(dyn, "simulate_batch", fake_batch)
-    monkeypatch.setattr(dsm.runner, "run_settings", lambda *a: (1, 1))
+        def __call__(self, keys, speed_rpm, *a, **kw):
+            n = speed_rpm.shape[0]
+            x = np.ones((n, 480))
+            x[[0, 3], 5] = np.nan              # items in slots 0 and 3: non-finite signal
+            code = np.zeros(n, np.int32)
+            code[[1, 4]] = 1                   # slots 1 and 4: max steps reached
+            x[[1, 4]] = np.nan
+            z = jnp.zeros(n)
+            return dict(sensor=jnp.asarray(x), housing_acceleration=jnp.asarray(x), result=jnp.asarray(code),
+                        pass_times=jnp.full((n, 1), jnp.inf), pass_jitter_percent=z, shaft_Hz=z + 30.0,
+                        ftf_Hz=z + 1.0, bpfo_Hz=z + 10.0, bpfi_Hz=z + 12.0, bsf_Hz=jnp.full(n, jnp.nan),
+                        pit_depth=z, unbridged=z, pit_ok=jnp.ones(n, bool), ball_iterations=1)
+
+    monkeypatch.setattr(dyn, "chunk_program", lambda *a, **kw: FakeProgram())
+    monkeypatch.setattr(dsm.runner, "run_settings", lambda *a: 1)
     with pytest.raises(NotConvergedError, match="spec.toml: 4 of 6 items of the data set failed"):
         dataset_case(spec(), tmp_path / "f.h5")
     s = dataset_case(spec(), tmp_path / "f.h5", throw=False)
@@ -181,18 +188,21 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
     bad = L["result"] != 0
     assert bad.sum() == 4 and set(L["result"][bad]) == {1, int(dsm.DatasetResult.nonfinite_signal)}
     assert np.all(x[bad] == 0) and np.all(x[~bad] == 1)
-    assert np.all(np.isfinite(L["bpfo_Hz"])) and np.all(L["bpfo_Hz"] == 0)
+    assert np.all(np.isfinite(L["bpfo_Hz"])) and np.all(L["bpfo_Hz"][bad] == 0) and np.all(L["bpfo_Hz"][~bad] == 10)
+    assert np.all(L["bsf_Hz"] == 0)
 
 
 def _interrupting(monkeypatch, at_call, how):
-    """simulate_batch that stops the run (Ctrl-C or SIGTERM to this process) at its call
-    number ``at_call``."""
+    """device_program that stops the run (Ctrl-C or SIGTERM to this process) at its call
+    number ``at_call`` (one call per chunk); the CPU micro-batch width set to 3, so that the
+    6-item spec at chunk 3 has two chunks."""
     import os
     import signal
 
-    import bearingsim.dynamics as dyn
+    import bearingsim.dataset as dsm
 
-    real = dyn.simulate_batch
+    monkeypatch.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
+    real = dsm.program.device_program
     calls = []
 
     def batch(*a, **kw):
@@ -203,7 +213,7 @@ def _interrupting(monkeypatch, at_call, how):
             raise KeyboardInterrupt
         return real(*a, **kw)
 
-    monkeypatch.setattr(dyn, "simulate_batch", batch)
+    monkeypatch.setattr(dsm.program, "device_program", batch)
     return calls
 
 
@@ -229,7 +239,9 @@ def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, 
     s = make_dataset(case, out, progress=False)
     assert len(calls) == 1 and s.count == 6 and s.failed == 0     # only the missing chunk ran
     assert not partial_path(out).exists()
-    assert out.read_bytes() == a.read_bytes()
+    ref = make_dataset(case, tmp_path / "ref.h5", progress=False)     # uninterrupted, the same width
+    assert ref.chunk == 3
+    assert out.read_bytes() == (tmp_path / "ref.h5").read_bytes()
 
 
 def test_partial_folder_of_another_spec_is_refused(files, tmp_path):
@@ -348,12 +360,15 @@ def test_shipped_specs_share_the_calibrated_structure(name):
 
 def test_dataset_items_carry_the_pass_to_pass_variability_of_a_single_run(tmp_path):
     """The shipped CWRU spec applies the calibrated pass-to-pass variability to every fault item
-    (scaled by the unbridged fraction of its pit): an item at the calibrated operating point
-    with the 0.021 in pit equals, to float32 storage (rel 1e-6), the single simulation of that
-    pit with the item's seed, depth, Newton steps and substeps (full ball solve, as the batch)
-    with the case's realism; the same single run with the variability off differs by more than
-    10 % of the peak."""
+    (scaled by the unbridged fraction of its pit, drawn on the device from the item's key).  With
+    the variability and the measurement noise off, an item at the calibrated operating point with the 0.021 in pit equals,
+    to float32 storage (rel 1e-6 of its peak), the single simulation of that pit with the item's
+    key (``simulate(key=)``: the same motion), depth, Newton steps and substeps (full ball solve);
+    with it on, the item differs from that run by more than 10 % of the peak and its labels carry
+    the calibrated maxima x the unbridged fraction.  (The variability's own random numbers come
+    from the signal stage's streams, bearingsim.keys.STREAMS, not NumPy's: data set version 5.)"""
     from bearingsim import dynamics as dyn
+    from bearingsim.dataset import chunk_keys
     from bearingsim.defect import Spall
 
     spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
@@ -362,26 +377,28 @@ def test_dataset_items_carry_the_pass_to_pass_variability_of_a_single_run(tmp_pa
                  "dataset.axial_N": [43.7, 43.7], "dataset.spall_length_mm": [0.5334, 0.5334],
                  "dataset.duration_s": 0.04, "dynamics.sample_rate_Hz": 12000}.items():
         spec = spec.with_value(k, v)
+    off = spec.with_value("dynamics.pass_amplitude_cv_max_percent", 0.0).with_value(
+        "dynamics.pass_delay_sd_max_percent", 0.0).with_value("dynamics.noise_rms_m_s2", 0.0)
     dataset_case(spec, tmp_path / "v.h5")
-    with h5py.File(tmp_path / "v.h5") as f:
-        X, L = f["signals"][()], f["labels"][()]
-        it, sub = int(f.attrs["ball_iterations"]), int(f.attrs["substeps"])
+    dataset_case(off, tmp_path / "o.h5")
+    with h5py.File(tmp_path / "v.h5") as f, h5py.File(tmp_path / "o.h5") as g:
+        X, L, X0 = f["signals"][()], f["labels"][()], g["signals"][()]
+        it, sub = int(g.attrs["ball_iterations"]), int(g.attrs["substeps"])
     assert np.all(L["result"] == 0) and np.all(L["unbridged_fraction"] > 0.5)
-    assert np.all(L["pass_delay_sd_percent"] > 0) and np.all(L["pass_amplitude_cv_percent"] > 0)
+    np.testing.assert_allclose(L["pass_delay_sd_percent"], 9.089 * L["unbridged_fraction"], rtol=1e-12)
+    np.testing.assert_allclose(L["pass_amplitude_cv_percent"], 2.334 * L["unbridged_fraction"], rtol=1e-12)
     cal = load_case(ROOT / "cases" / "cwru_6205.toml")
     b, d = cal.bearing(), cal.dynamics_settings()
     on = dyn.Realism.from_settings(d)
     i = 1
     sp = Spall.from_length(b, 0.0, 0.5334e-3, L["effective_depth_mm"][i] * 1e-3, "rectangular", "outer")
-    kw = dict(seed=int(L["realism_seed"][i]), ball_iterations=it, substeps=sub, ball_solver="full",
-              record_balls=False)
-    args = (b, cal.operation(), cal.loads(), sp, dyn.DynamicsParameters.from_settings(d), 0.04, 12000.0)
-    r = dyn.simulate(*args, realism=on, **kw)
-    peak = np.abs(X[i]).max()
-    np.testing.assert_allclose(X[i], r.sensor_acceleration, rtol=0, atol=1e-6 * peak)
-    assert L["pass_delay_sd_percent"][i] == pytest.approx(r.realism["pass_delay_sd_percent"], rel=1e-12)
-    r0 = dyn.simulate(*args, realism=on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0),
-                      **kw)
+    r0 = dyn.simulate(b, cal.operation(), cal.loads(), sp, dyn.DynamicsParameters.from_settings(d), 0.04, 12000.0,
+                      realism=on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0,
+                                          noise_rms=0.0),
+                      key=chunk_keys(L["key"][i:i + 1])[0], ball_iterations=it, substeps=sub, ball_solver="full",
+                      record_balls=False)
+    peak = np.abs(X0[i]).max()
+    np.testing.assert_allclose(X0[i], r0.sensor_acceleration, rtol=0, atol=1e-6 * peak)
     assert np.abs(X[i] - r0.sensor_acceleration).max() > 0.1 * peak
 
 
@@ -421,8 +438,6 @@ def test_randomised_labels_are_drawn_apart_from_the_old_ones():
 
 
 def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
-    from bearingsim.background import background_signal, random_background
-    from bearingsim.dataset import item_seeds
     case, a, *_ = files
     # gain 2, background off: exactly twice the signals of the gain-1 data set (float32 rounding)
     s2 = make_dataset(spec(extra="signal_gain = [2.0, 2.0]\n"), tmp_path / "g2.h5", progress=False)
@@ -438,11 +453,18 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
         x3 = f3["signals"][()].astype(float)
         lab = f3["labels"][()]
         fs = float(f3.attrs["sample_rate_Hz"])
-    seeds = item_seeds(7, 6)
+    # each item's background: the signal stage's draw from its key's "background" stream
+    import jax
+
+    from bearingsim import signal_stage as ss
+    from bearingsim.dataset import Physics, chunk_keys, signal_settings
+    bcase = spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\nbackground_rms_m_s2 = [0.5, 0.5]\n')
+    st = signal_settings(bcase, bcase.data["dataset"], fs, x3.shape[1], Physics.of_case(bcase))
+    keys = chunk_keys(lab["key"])
     for i in range(6):
-        r = np.random.default_rng(np.random.SeedSequence([int(seeds[i]), 11]))
-        bg = random_background(r, fs, {"noise_rms_m_s2": (0.5, 0.5)})
-        want = background_signal(r, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, bg)
+        kb = jax.random.split(ss.stream_key(jax.numpy.asarray(keys[i]), "background"))
+        bg = ss.draw_background(kb[0], fs, st.ranges)
+        want = np.asarray(ss.background_record(kb[1], bg, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, st.knock_max))
         assert np.allclose(x3[i] - x2[i], want, atol=3e-6 * max(1.0, np.abs(x3[i]).max()))
         assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
 

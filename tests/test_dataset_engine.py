@@ -20,10 +20,15 @@ def _bytes(path):
         return f["signals"][()].tobytes(), f["labels"][()].tobytes(), f["transfer_path"][()].tobytes()
 
 
+def spec20():
+    """20 items (two CPU micro-batches of 16, the second padded)."""
+    return spec().with_value("dataset.count", 20)
+
+
 @pytest.fixture(scope="module")
 def chunked(tmp_path_factory):
-    """The 6-item spec of test_dataset at chunk 2 (3 chunks) and chunk 6 (1 chunk), the second
-    twice (reproducibility), counting the device-program calls."""
+    """The 20-item spec at chunk 16 (2 chunks) and chunk 64 (1 chunk of two micro-batches), the
+    second twice (reproducibility), counting the device-program calls."""
     d = tmp_path_factory.mktemp("engine")
     calls = []
     mp = pytest.MonkeyPatch()
@@ -31,46 +36,21 @@ def chunked(tmp_path_factory):
     mp.setattr(dsm.program, "device_program", lambda plan, pad: (calls.append(pad.size), real(plan, pad))[1])
     try:
         out = {}
-        for name, chunk in (("c2", 2), ("c6", 6), ("c6b", 6)):
+        for name, chunk in (("c16", 16), ("c64", 64), ("c64b", 64)):
             n0 = len(calls)
-            out[name] = (make_dataset(spec(), d / f"{name}.h5", progress=False, chunk=chunk), calls[n0:])
+            out[name] = (make_dataset(spec20(), d / f"{name}.h5", progress=False, chunk=chunk), calls[n0:])
     finally:
         mp.undo()
     return d, out
 
 
-def same_but_the_last_bits(a, b):
-    """Labels and transfer paths bitwise equal, but for the two set from the signal's level
-    (``signal_gain`` and ``snr_dB`` with a target SNR: 1e-8 relative); every signal equal to 1e-7
-    of its own peak (the dynamics batch's XLA kernels round the last float64 bits by batch width:
-    ~1e-15 relative in the ring displacement, ~1e-11 of a healthy item's small acceleration,
-    below float32 for a faulty one; 2e-8 measured with the four-class spec's SNR scaling)."""
-    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        la, lb = fa["labels"][()], fb["labels"][()]
-        assert fa["transfer_path"][()].tobytes() == fb["transfer_path"][()].tobytes()
-        x, y = fa["signals"][()].astype(float), fb["signals"][()].astype(float)
-    for f in la.dtype.names:
-        if f in ("signal_gain", "snr_dB"):
-            np.testing.assert_allclose(la[f], lb[f], rtol=1e-8, atol=1e-12)
-        else:
-            assert la[f].tobytes() == lb[f].tobytes(), f
-    peak = np.abs(x).max(axis=1, keepdims=True)
-    assert np.all(np.abs(x - y) <= 1e-7 * peak)
-    return x.tobytes() == y.tobytes()
-
-
-def test_chunk_size_changes_no_label_and_no_signal_beyond_the_last_bits(chunked):
-    d, out = chunked
-    assert out["c2"][0].chunk == 2 and out["c6"][0].chunk == 6 and out["c2"][0].failed == 0
-    same_but_the_last_bits(d / "c2.h5", d / "c6.h5")
-
-
-@pytest.mark.xfail(strict=True, reason="the dynamics batch (helper l1's program) rounds the last float64 "
-                   "bits by batch width; identical bytes need a fixed vmapped micro-batch (chunk a multiple "
-                   "of it, lax.map over micro-batches) or a program without batch-width-dependent kernels")
 def test_identical_bytes_across_chunk_sizes(chunked):
-    d, _ = chunked
-    assert _bytes(d / "c2.h5") == _bytes(d / "c6.h5")
+    """Chunk 16 (two chunks) and chunk 64 (one chunk of the 20 items padded to two micro-batches of
+    16): the same bytes of signals, labels and transfer paths (every program runs on
+    micro-batches of the platform's fixed width, dataset.micro_batch)."""
+    d, out = chunked
+    assert out["c16"][0].chunk == 16 and out["c64"][0].chunk == 32 and out["c16"][0].failed == 0
+    assert _bytes(d / "c16.h5") == _bytes(d / "c64.h5")
 
 
 def test_reproducible_from_the_seed(chunked):
@@ -78,7 +58,7 @@ def test_reproducible_from_the_seed(chunked):
     draws other items; each item's stored key is fold_in(PRNGKey(seed), index)."""
     import jax
     d, _ = chunked
-    assert _bytes(d / "c6.h5") == _bytes(d / "c6b.h5")
+    assert _bytes(d / "c64.h5") == _bytes(d / "c64b.h5")
     lab = draw_labels(spec())
     for i in (0, 5):
         k = np.asarray(jax.random.fold_in(jax.random.PRNGKey(7), i)).astype(np.uint64)
@@ -98,15 +78,14 @@ def test_an_item_does_not_depend_on_the_count():
 
 
 def test_a_chunk_is_one_device_program_call(chunked):
-    """simulate_chunk makes exactly one device_program call per chunk, on the padded chunk
-    (no per-item call from the host)."""
+    """simulate_chunk makes exactly one device_program call per chunk, on the chunk padded to
+    whole micro-batches (no per-item call from the host)."""
     _, out = chunked
-    assert out["c2"][1] == [2, 2, 2] and out["c6"][1] == [6]
+    W = dsm.micro_batch("cpu")
+    assert W == 16
+    assert out["c16"][1] == [16, 16] and out["c64"][1] == [32]
 
 
-@pytest.mark.xfail(strict=True, reason="until the jitted dynamics batch (helper l1) and the JAX signal "
-                   "stage (helper l2) are plugged into dataset.program.device_program: the chunk still "
-                   "draws motions and backgrounds per item on the host")
 def test_a_chunk_makes_no_host_round_trip(tmp_path):
     """With its inputs on the device, a chunk's program transfers nothing between host and
     device until it returns (jax.transfer_guard)."""
@@ -125,9 +104,13 @@ def test_a_chunk_makes_no_host_round_trip(tmp_path):
     finally:
         mp.undo()
     p = plan["p"]
-    pad = np.asarray(p.items(0))
+    idx = np.asarray(p.items(0))
+    pad = np.concatenate([idx, np.repeat(idx[-1:], p.width - idx.size)])
+    before = dsm.plan_program(p)[0].calls
     with jax.transfer_guard("disallow"):
-        dsm.program.device_program(p, pad)
+        out = dsm.program.device_program(p, pad)
+    assert dsm.plan_program(p)[0].calls - before == 2          # prepare + run: one micro-batch
+    assert out["signals"].shape[0] == p.width and np.all(out["result"] == 0)
 
 
 def test_device_and_codec_choices(tmp_path):

@@ -18,11 +18,22 @@ from test_dataset import spec as _spec  # noqa: E402
 
 
 def spec():
-    """The tiny spec of test_dataset (6 items of 0.02 s in 2 chunks of 3) with round-pit depths:
-    the pit depths' batched quasi-static solves run on the cluster too."""
+    """The tiny spec of test_dataset (6 items of 0.02 s in 2 chunks of 3) with round-pit depths
+    (computed inside the chunk program, on the workers)."""
     return _spec(extra='depth_rule = "pit"')
 
 distributed = pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def width3():
+    """The CPU micro-batch width set to 3 in this (client) process, so that the 6 items make two
+    chunks of one micro-batch each (the width travels to the workers in the plan)."""
+    import bearingsim.dataset as dsm
+    mp = pytest.MonkeyPatch()
+    mp.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
+    yield
+    mp.undo()
 
 
 def _no_dask(monkeypatch):
@@ -93,13 +104,12 @@ def test_two_workers_same_bytes_with_a_worker_killed(serial, runner, tmp_path):
 
 
 def test_two_workers_and_another_chunk_size(serial, runner, tmp_path):
-    """2 workers at chunk 2 (3 chunks) give the labels of the in-process run at chunk 3 bit for
-    bit and its signals but for the last bits (test_dataset_engine.same_but_the_last_bits)."""
-    from test_dataset_engine import same_but_the_last_bits
-    out = tmp_path / "c2.h5"
-    s = make_dataset(spec(), out, progress=False, runner=runner, chunk=2)
-    assert s.chunk == 2 and s.failed == 0
-    same_but_the_last_bits(serial, out)
+    """2 workers at chunk 6 (one chunk of two micro-batches) give the bytes of the in-process run
+    at chunk 3 (two chunks)."""
+    out = tmp_path / "c6.h5"
+    s = make_dataset(spec(), out, progress=False, runner=runner, chunk=6)
+    assert s.chunk == 6 and s.failed == 0
+    _same(serial, out)
 
 
 def test_interrupted_distributed_run_resumes_in_process(serial, runner, tmp_path):

@@ -28,7 +28,7 @@ def schema_reference_markdown() -> str:
         out.append("|---|---|---|---|---|---|")
         for key, spec in sec.keys.items():
             typ = {"float": "float", "int": "integer", "bool": "boolean", "str": "string",
-                   "enum": "string", "numbers": "array of numbers",
+                   "enum": "string", "numbers": "array of numbers", "names": "array of strings",
                    "range": "[min, max]"}[spec.type]
             if spec.default_doc is not None:
                 default = spec.default_doc
@@ -49,6 +49,8 @@ def schema_reference_markdown() -> str:
                 allowed = "`true`, `false`"
             elif spec.type == "numbers":
                 allowed = "non-empty"
+            elif spec.type == "names":
+                allowed = "each one of " + ", ".join(f'`"{c}"`' for c in spec.choices)
             elif spec.type == "range":
                 allowed = "min <= max" + (f"; each {spec.range_text()}" if spec.range_text() else "")
             else:

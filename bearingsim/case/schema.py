@@ -38,6 +38,7 @@ TYPE_NAMES = {
     "str": "a string",
     "enum": "a string",
     "numbers": "a non-empty array of numbers",
+    "names": "an array of strings",
     "range": "a two-element array [min, max] of numbers",
 }
 
@@ -140,6 +141,10 @@ def _str(doc, default=REQUIRED):
 
 def _enum(doc, choices, default=REQUIRED):
     return Key("enum", doc, "", default, choices=tuple(choices))
+
+
+def _names(doc, choices, default=REQUIRED):
+    return Key("names", doc, "", default, choices=tuple(choices))
 
 
 def _range(doc, unit="", default=REQUIRED, default_doc=None, **rng):
@@ -541,6 +546,16 @@ SCHEMA: dict[str, Section] = {
                                 "bearingsim calibrate)", ("none", "random", "machine"), "none"),
             "background_rms_m_s2": _range("broadband background RMS range of background = \"random\" "
                                           "(log-uniform)", "m_s2", [0.2, 2.0], gt=0),
+            "realism_ingredients": _names("issue 26's ingredients added inside the device program "
+                                          "(bearingsim.nuisance): ball_fault_model (a ball pit's signal "
+                                          "as real damaged balls show it: spin-axis gate, contact noise over "
+                                          "the pit's edge, load-zone and ring-waviness modulation), nuisance "
+                                          "(shaft and looseness lines, rub, lines near bearing orders, knocks "
+                                          "in every class, at the background RMS), shaft_modulation (the "
+                                          "whole record modulated at shaft orders and half orders); each "
+                                          "drawn from the item's key (ranges: bearingsim.nuisance."
+                                          "NUISANCE_DEFAULTS, docs/realism.md); [] none",
+                                          ("ball_fault_model", "nuisance", "shaft_modulation"), []),
             "split_fractions": Key("numbers", "train, validation and test fractions of the label field "
                                    "split (0, 1, 2), assigned per item and class: windows of one item "
                                    "never straddle two parts", "", [0.7, 0.15, 0.15]),

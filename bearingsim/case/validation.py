@@ -75,6 +75,16 @@ def _check_value(name: str, spec: Key, v):
         if xs[0] > xs[1]:
             return False, None, f"{shown} has min > max: must be {spec.requirement_text()}"
         return True, xs, None
+    if t == "names":
+        if not isinstance(v, list) or not all(isinstance(e, str) for e in v):
+            return False, None, f"{shown} has the wrong type: expected {TYPE_NAMES[t]}, got {kind_of(v)}"
+        bad = [e for e in v if e not in spec.choices]
+        if bad:
+            return False, None, (f"{shown} names {json.dumps(bad[0])}, not allowed: each must be one of "
+                                 + ", ".join(json.dumps(c) for c in spec.choices))
+        if len(set(v)) != len(v):
+            return False, None, f"{shown} names an ingredient twice"
+        return True, list(v), None
     if t == "numbers":
         if not isinstance(v, list):
             return False, None, f"{shown} has the wrong type: expected {TYPE_NAMES[t]}, got {kind_of(v)}"

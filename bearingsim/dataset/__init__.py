@@ -7,8 +7,9 @@ The package's files show the flow:
              defect.LOCATIONS``) and the label draws: item i is a pure function of (spec, seed,
              i): its key ``jax.random.fold_in(PRNGKey(seed), i)`` draws all of its labels
              (vmapped, on the CPU);
-``program``  the device program: :func:`simulate_chunk` (plan, k) pads the chunk and makes one
-             call, :func:`device_program` (the dynamics batch, then the signal stage);
+``program``  the device program: :func:`simulate_chunk` (plan, k) pads the chunk to whole
+             micro-batches (:func:`micro_batch`) and makes one call, :func:`device_program` (per
+             micro-batch the chunk program of bearingsim.dynamics, then the signal stage);
 ``writer``   the resumable chunk files (a folder of raw .npy arrays per chunk, renamed
              atomically) and the HDF5 layout (``/signals`` uncompressed by default: ``compression=``);
 ``runner``   the chunk plan (built physics objects, not the case), the device (``device=``), the
@@ -19,9 +20,9 @@ Resumable and interruptible.  Each finished chunk is saved at once (atomically) 
 every finished chunk, and running the same command again continues from them (a spec that
 differs from the one the folder was started with is refused).  When every chunk is there the
 HDF5 file is assembled from the folder in item order (atomically; the folder is then removed),
-so the same spec, seed and chunk size give a bit-identical file however often the run was
-interrupted and on any number of Dask workers (on the same device type); another chunk size
-gives the same drawn labels and the signals but for their last bits (docs/scale.md).  Memory stays bounded
+so the same spec and seed give a bit-identical file for any chunk size, however often the run
+was interrupted and on any number of Dask workers (on the same device type: every program runs
+on micro-batches of a fixed width per platform).  Memory stays bounded
 by one chunk.  Ctrl-C / SIGTERM raise :class:`Interrupted` (exit code 130) with a one-line
 message; nothing temporary is left behind.
 
@@ -39,19 +40,20 @@ Items whose simulation failed keep a zero signal and a result code != 0
 """
 from __future__ import annotations
 
-from .program import (BACKGROUND_FIELDS, CHUNK_FIELDS, BackgroundSpec, Physics, background_spec, device_program,
-                      item_background, pit_depths, pit_depths_batch, run_settings, signal_stage, simulate_chunk)
+from .program import (BACKGROUND_FIELDS, CHUNK_FIELDS, DEFAULT_MICRO_BATCH, MICRO_BATCH, Physics, chunk_keys,
+                      device_program, micro_batch, pit_depths, pit_depths_batch, plan_program, run_settings,
+                      simulate_chunk)
 from .runner import (BYTES_PER_SAMPLE, DEVICES, MAX_GPU_CHUNK, ChunkPlan, Interrupted, default_chunk,
-                     make_dataset, resolve_device, serial_imap)
+                     make_dataset, resolve_device, serial_imap, signal_settings)
 from .spec import (CLASSES, FIELD_STREAMS, LABEL_DTYPE, LABEL_FIELDS, RANGES, SPLITS, DatasetResult,
                    DatasetSummary, class_counts, class_of_index, defect_geometry, draw_labels, item_keys,
                    item_locations, item_seeds, result_messages, settings, simulation_order, slots_of,
                    transfer_paths)
 from .writer import CHUNK_FORMAT, COMPRESSIONS, DEFAULT_COMPRESSION, partial_path
 
-__all__ = ["ChunkPlan", "CHUNK_FIELDS", "BACKGROUND_FIELDS", "simulate_chunk", "device_program", "signal_stage",
-           "serial_imap", "pit_depths", "pit_depths_batch", "run_settings", "Physics", "BackgroundSpec",
-           "background_spec", "item_background", "CLASSES", "SPLITS", "RANGES", "FIELD_STREAMS", "LABEL_FIELDS",
+__all__ = ["ChunkPlan", "CHUNK_FIELDS", "BACKGROUND_FIELDS", "simulate_chunk", "device_program", "plan_program",
+           "serial_imap", "pit_depths", "pit_depths_batch", "run_settings", "Physics", "signal_settings",
+           "micro_batch", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "chunk_keys", "CLASSES", "SPLITS", "RANGES", "FIELD_STREAMS", "LABEL_FIELDS",
            "LABEL_DTYPE", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels", "item_keys",
            "item_seeds", "class_counts", "class_of_index", "item_locations", "slots_of", "transfer_paths",
            "simulation_order", "defect_geometry", "settings", "result_messages", "make_dataset", "partial_path",

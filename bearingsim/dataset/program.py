@@ -1,14 +1,20 @@
 """The device program of a data set: one chunk of items in, its signals and simulated labels out.
 
 :func:`simulate_chunk` (plan, k) is the unit of work (in-process and on the Dask workers).  It
-pads chunk ``k`` to ``plan.chunk`` items (one compiled program for every chunk) and calls
-:func:`device_program` once: the one place that calls the dynamics batch
-(:func:`bearingsim.dynamics.simulate_batch`) and the signal stage (:func:`signal_stage`:
-background, fault-level (SNR) scaling, flags).  The integrator plugs the jitted dynamics batch
-and the pure-JAX signal stage in here; nothing else in the package changes.
+pads chunk ``k`` to a multiple of the micro-batch width W (:func:`micro_batch`: cpu 16, gpu
+1024) with its last item and calls :func:`device_program` once: per micro-batch of W items the
+chunk program of :func:`bearingsim.dynamics.chunk_program` (quasi-static states and the pits'
+effective depths, the Newton step count of the micro-batch from its menu, motion and the
+record's time loop) and the signal stage :func:`bearingsim.signal_stage.finish_items` (pass
+variability and strikes, noise, background, fault level, issue 26's ingredients), every draw
+from the item's key (:mod:`bearingsim.keys`).  The host puts the chunk's label arrays on the
+device and takes the outputs back, both explicitly; it draws nothing and loops over no item.
+Every program runs W items wide whatever the chunk size, so the bytes of an item do not depend
+on the chunk size or the worker count (on the same device type).
 
-Also here: the per-item inputs the program needs before it runs (the pit effective depths,
-:func:`pit_depths`, and the run settings, :func:`run_settings`).
+Also here: :func:`run_settings` (the data set's substeps, fixed once) and :func:`pit_depths`,
+the host twin of the pit depths the chunk program computes (kept as a public helper, and for
+the pass variability of ``depth_rule = "machined"``).
 """
 from __future__ import annotations
 
@@ -17,17 +23,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import dynamics
-from ..case.units import to_si
+from ..case.units import from_si, to_si
 from .spec import DatasetResult, item_locations
 
-__all__ = ["CHUNK_FIELDS", "BACKGROUND_FIELDS", "Physics", "BackgroundSpec", "background_spec", "item_background",
-           "device_program", "signal_stage", "simulate_chunk", "pit_depths", "pit_depths_batch", "run_settings"]
+__all__ = ["CHUNK_FIELDS", "BACKGROUND_FIELDS", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "Physics", "micro_batch",
+           "chunk_keys", "plan_program", "device_program", "simulate_chunk", "pit_depths", "pit_depths_batch",
+           "run_settings"]
 
 BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
                      "background_knock_rate_Hz")
 #: the per-item label fields a chunk file carries (besides index and signals)
-CHUNK_FIELDS = ("result", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
-                "pass_amplitude_cv_percent", "signal_gain", "snr_dB") + BACKGROUND_FIELDS
+CHUNK_FIELDS = ("result", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
+                "pass_amplitude_cv_percent", "signal_gain", "snr_dB", "effective_depth_mm",
+                "unbridged_fraction") + BACKGROUND_FIELDS
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,128 +58,160 @@ class Physics:
                    case.data.get("defect", {}).get("profile", "rectangular"))
 
 
-@dataclass(frozen=True)
-class BackgroundSpec:
-    """The data set's ``background`` setting: ``kind`` "machine" (``fixed``: the case's
-    [background]) or "random" (drawn per item, broadband rms in ``rms`` m/s^2)."""
-
-    kind: str
-    fixed: object = None
-    rms: tuple = (0.2, 2.0)
+#: the micro-batch width W of the device programs per JAX platform: every program call is W items
+#: wide (the chunk is a loop over its micro-batches), so that an item's bytes do not depend on the
+#: chunk size or the worker count (XLA's kernels may round the last bits by batch width)
+MICRO_BATCH = {"cpu": 16, "gpu": 1024}
+#: W of a platform not in :data:`MICRO_BATCH`
+DEFAULT_MICRO_BATCH = 1024
 
 
-def background_spec(case, ds):
-    """The :class:`BackgroundSpec` of the [dataset] ``background`` key (None for "none")."""
-    from .. import background as bgm
-
-    kind = ds.get("background", "none")
-    if kind == "none":
-        return None
-    fixed = None
-    if kind == "machine":
-        sec = case.si("background") if "background" in case.data else {}
-        fixed = bgm.Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
-                               tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
-                               tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels") or ()),
-                               tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
-                               float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
-                               float(sec.get("knock_damping_ratio", 0.05)))
-    return BackgroundSpec(kind, fixed, tuple(ds.get("background_rms_m_s2", (0.2, 2.0))))
+def micro_batch(platform) -> int:
+    """The micro-batch width W of JAX platform ``platform`` ("cpu", "gpu", ...; None: JAX's default):
+    :data:`MICRO_BATCH` (cpu 16: a chunk of 16 items per core fills a CPU; gpu 1024: enough items
+    per program to fill an H100's SMs at a few MB per item), else :data:`DEFAULT_MICRO_BATCH`."""
+    if platform is None:
+        import jax
+        platform = jax.devices()[0].platform
+    return MICRO_BATCH.get(str(platform), DEFAULT_MICRO_BATCH)
 
 
-def item_background(spec, fs):
-    """A function (realism seed, shaft Hz, T) -> (background record, labels) of ``spec`` (a
-    :class:`BackgroundSpec`; None for none)."""
-    from .. import background as bgm
-
-    if spec is None:
-        return None
-
-    def draw(seed, shaft_hz, T):
-        rng = np.random.default_rng(np.random.SeedSequence([int(seed), 11]))
-        bg = spec.fixed if spec.kind == "machine" else bgm.random_background(rng, fs, {"noise_rms_m_s2": spec.rms})
-        return bgm.background_signal(rng, T, fs, shaft_hz, bg), bg.as_labels()
-    return draw
+def chunk_keys(lab_key) -> np.ndarray:
+    """(N, 2) uint32 key data of the label field ``key`` (word0 << 32 | word1)."""
+    k = np.asarray(lab_key, np.uint64)
+    return np.stack([(k >> np.uint64(32)).astype(np.uint32), (k & np.uint64(0xFFFFFFFF)).astype(np.uint32)], -1)
 
 
-def signal_stage(a, fault_class, gain, snr_target, seeds, speed_rpm, fs, background, fault_snr):
-    """Sensor signals of a chunk from the dynamics' (m, T) accelerations ``a``: each item's
-    background added, its fault level scaled (the drawn ``gain``, or with ``fault_snr`` the gain
-    that puts the fault signal ``snr_target`` dB over the item's background).  Returns (signals,
-    gain, snr_dB, background labels).  The background records are drawn per item from the seeds
-    (host NumPy) until the pure-JAX signal stage replaces this function."""
-    m, T = a.shape
-    gain = np.asarray(gain, float).copy()
-    bg_labels = {k: np.zeros(m) for k in BACKGROUND_FIELDS}
-    if background is None:
-        return a * gain[:, None], gain, np.zeros(m), bg_labels
-    draw = item_background(background, fs)
-    x = np.zeros_like(a)
-    for j in range(m):                       # host draws: replaced by the device signal stage
-        x[j], lb = draw(seeds[j], speed_rpm[j] / 60.0, T)
-        for k in BACKGROUND_FIELDS:
-            bg_labels[k][j] = lb[k]
-    s = np.sqrt(np.mean((a - a.mean(1, keepdims=True)) ** 2, axis=1))
-    rb = np.sqrt(np.mean(x * x, axis=1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        if fault_snr:
-            gain = np.where((fault_class > 0) & (s > 0.0), 10.0 ** (snr_target / 20.0) * rb / s, gain)
-        snr = np.where((s > 0.0) & (rb > 0.0), 20.0 * np.log10(gain * s / rb), 0.0)
-    return gain[:, None] * a + x, gain, snr, bg_labels
+_PROGRAMS: dict = {}
+
+
+def plan_program(plan):
+    """The :class:`bearingsim.dynamics.ChunkProgram` of ``plan`` (built once per plan and process:
+    the plan is pickled to Dask workers without it) and the plan's per-width constants."""
+    import jax
+    import jax.numpy as jnp
+
+    key = id(plan)
+    hit = _PROGRAMS.get(key)
+    if hit is not None and hit[0] is plan:
+        return hit[1], hit[2]
+    ph = plan.physics
+    T = int(round(plan.duration * plan.fs))
+    prog = dynamics.chunk_program(ph.bearing, slots=plan.slots, profile=ph.profile, control=ph.control,
+                                  hertz_method=ph.hertz_method, sample_rate=plan.fs, samples=T,
+                                  substeps=plan.substeps, scheme="newmark", realism=ph.realism,
+                                  max_speed_rpm=float(np.max(plan.lab["speed_rpm"])))
+    W = plan.width
+    dev = jax.devices(plan.device)[0] if plan.device else jax.devices()[0]
+    params = jax.device_put(jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (W,)) if jnp.ndim(a) == 0 else a,
+                                                   ph.params), dev)
+    if len(_PROGRAMS) > 4:
+        _PROGRAMS.clear()
+    _PROGRAMS[key] = (plan, prog, (dev, params))
+    return prog, (dev, params)
+
+
+def _host_inputs(plan, pad):
+    """The per-item inputs of the padded items ``pad`` as host arrays (no per-item work)."""
+    from ..defect import LOCATIONS
+    from ..signal_stage import ItemDraws
+
+    lab = plan.lab[pad]
+    n = pad.size
+    loads = np.zeros((n, 5))
+    loads[:, 0], loads[:, 2] = lab["radial_N"], lab["axial_N"]
+    li = np.select([plan.loc[pad] == L for L in LOCATIONS], list(range(len(LOCATIONS))), 0)
+    modes = np.asarray(plan.modes[pad], float)
+    sim = dict(keys=chunk_keys(lab["key"]), speed_rpm=np.asarray(lab["speed_rpm"], float), loads=loads,
+               theta0=np.full(n, float(plan.physics.cage_angle)), location=li.astype(np.int32),
+               center=np.asarray(plan.center[pad], float), extent=np.asarray(plan.extent[pad], float),
+               depth=np.asarray(plan.depth[pad], float), modes=tuple(np.ascontiguousarray(modes[..., j])
+                                                                    for j in range(3)))
+    if plan.pit:
+        sim["pit"] = (to_si(np.asarray(lab["spall_length_mm"], float), "mm"),
+                      to_si(np.asarray(lab["spall_depth_mm"], float), "mm"))
+    draws = ItemDraws(modes, np.asarray(lab["signal_gain"], float), np.asarray(lab["snr_dB"], float),
+                      np.asarray(lab["strike_probability"], float), np.asarray(lab["spall_center_deg"], float))
+    sig = dict(fault_class=np.asarray(lab["fault_class"], np.int32), draws=draws,
+               unbridged=None if plan.unbridged is None else np.asarray(plan.unbridged[pad], float))
+    return sim, sig
 
 
 def device_program(plan, pad):
-    """The chunk's program on the padded item indices ``pad`` (``plan.chunk`` of them): the
-    dynamics batch, then the signal stage.  Returns a dict of (chunk,) / (chunk, T) host arrays."""
-    import equinox as eqx
+    """The chunk's programs on the padded item indices ``pad`` (a multiple of ``plan.width``
+    items): per micro-batch of W = ``plan.width`` items the chunk program
+    (:func:`bearingsim.dynamics.chunk_program`: states, pit depths, Newton count, motion, time
+    loop) and the signal stage (:func:`bearingsim.signal_stage.finish_items`: pass variability,
+    strikes, noise, background, fault level, issue 26's ingredients), every draw from the item's
+    key.  The inputs go to the device explicitly (``jax.device_put``) and the outputs come back
+    explicitly (``jax.device_get``): no implicit transfer and no per-item host work.  Returns a
+    dict of (len(pad),) / (len(pad), T) host arrays: the signals and :data:`CHUNK_FIELDS`."""
+    import jax
 
-    p, ph, lab = plan, plan.physics, plan.lab
-    params = ph.params
-    if p.modes is not None:
-        params = eqx.tree_at(lambda q: (q.resonance_frequency, q.resonance_damping_ratio, q.resonance_gain),
-                             params, tuple(np.asarray(p.modes[pad][..., j]) for j in range(3)))
-    strike = lab["strike_probability"][pad]
-    loads = np.zeros((pad.size, 5))
-    loads[:, 0], loads[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
-    res = dynamics.simulate_batch(
-        ph.bearing, lab["speed_rpm"][pad], loads, p.center[pad], p.extent[pad], p.depth[pad], ph.profile, params,
-        p.duration, p.fs, ph.cage_angle, location=p.loc[pad], slots=p.slots, realism=ph.realism,
-        seeds=lab["realism_seed"][pad], control=ph.control, hertz_method=ph.hertz_method,
-        ball_iterations=p.ball_iterations, substeps=p.substeps, unbridged=p.unbridged[pad],
-        strike=strike if np.any(strike < 1.0) else None)
-    a = np.asarray(res.sensor_acceleration, float)
-    sig, gain, snr, bg = signal_stage(a, lab["fault_class"][pad], lab["signal_gain"][pad], lab["snr_dB"][pad],
-                                      lab["realism_seed"][pad], lab["speed_rpm"][pad], p.fs, p.background,
-                                      p.fault_snr)
-    code = np.asarray(res.result).astype(np.int32)
-    code = np.where((code == 0) & ~np.all(np.isfinite(sig), axis=1), int(DatasetResult.nonfinite_signal), code)
-    code = np.where(p.pit_ok[pad], code, int(DatasetResult.pit_contact))
+    from ..signal_stage import finish_items
+
+    prog, (dev, params) = plan_program(plan)
+    W = plan.width
+    if pad.size % W:
+        raise ValueError(f"a chunk is a multiple of the micro-batch width {W}, got {pad.size} items")
+    sim, sig = _host_inputs(plan, pad)
+    parts = []
+    for j in range(0, pad.size, W):             # micro-batches (the same compiled programs), not items
+        cut = lambda a: jax.tree_util.tree_map(lambda v: v[j:j + W], a)  # noqa: E731
+        s_in = jax.device_put(cut(sim), dev)
+        g_in = jax.device_put(cut({k: v for k, v in sig.items() if v is not None}), dev)
+        out = prog(s_in["keys"], s_in["speed_rpm"], s_in["loads"], s_in["theta0"], s_in["location"],
+                   s_in["center"], s_in["extent"], s_in["depth"], s_in["modes"], params, pit=s_in.get("pit"))
+        unb = g_in["unbridged"] if "unbridged" in g_in else out["unbridged"]
+        freqs = jax.numpy.stack([out[k] for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")], -1)
+        x, lb = finish_items(s_in["keys"], out["housing_acceleration"], out["sensor"], out["pass_times"], unb,
+                             g_in["fault_class"], out["shaft_Hz"], g_in["draws"], plan.signal, freqs)
+        keep = {k: out[k] for k in ("result", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent",
+                                    "pit_depth", "unbridged", "pit_ok")}
+        host = jax.device_get((x, lb, keep))
+        host[2]["ball_iterations"] = np.full(W, out["ball_iterations"], np.int32)
+        parts.append(host)
+    cat = lambda i, k: np.concatenate([p[i][k] for p in parts])  # noqa: E731
+    sig_all = np.concatenate([p[0] for p in parts])
+    code = cat(2, "result").astype(np.int32)
+    code = np.where((code == 0) & ~cat(1, "finite"), int(DatasetResult.nonfinite_signal), code)
+    code = np.where(cat(2, "pit_ok"), code, int(DatasetResult.pit_contact))
     ok = code == 0
-    n = pad.size
-    rl = res.realism
-    out = dict(signals=np.where(ok[:, None], sig, 0.0).astype(np.float32), result=code,
-               pass_jitter_percent=np.array([r["pass_jitter_percent"] for r in rl]),
-               pass_delay_sd_percent=np.array([r.get("pass_delay_sd_percent", 0.0) for r in rl]),
-               pass_amplitude_cv_percent=np.array([r.get("pass_amplitude_cv_percent", 0.0) for r in rl]),
-               signal_gain=gain, snr_dB=snr, **bg)
-    for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
-        v = np.broadcast_to(np.asarray(getattr(res, k), float), (n,))
+    out = dict(signals=np.where(ok[:, None], sig_all, 0.0).astype(np.float32), result=code,
+               ball_iterations=cat(2, "ball_iterations"))
+    for k in ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent") + BACKGROUND_FIELDS:
+        out[k] = np.asarray(cat(1, k), float)
+    out["pass_jitter_percent"] = np.asarray(cat(2, "pass_jitter_percent"), float)
+    for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
+        v = np.asarray(cat(2, k), float)
         out[k] = np.where(np.isfinite(v) & ok, v, 0.0)
+    if plan.pit:
+        out["effective_depth_mm"] = from_si(np.asarray(cat(2, "pit_depth"), float), "mm")
+        out["unbridged_fraction"] = np.asarray(cat(2, "unbridged"), float)
+    else:
+        out["effective_depth_mm"] = from_si(np.asarray(plan.depth[pad], float), "mm")
+        out["unbridged_fraction"] = (np.zeros(pad.size) if plan.unbridged is None
+                                     else np.asarray(plan.unbridged[pad], float))
     return out
 
 
 def simulate_chunk(plan, k: int) -> dict:
     """Chunk ``k`` of a data set: the arrays of its chunk file (``index``, ``signals`` and the
-    per-item label fields the simulation fills, :data:`CHUNK_FIELDS`).  A pure function of (plan,
-    k): every item's draws come from its own key, so the in-process loop and any Dask worker give
-    the same bytes.  Runs on ``plan.device`` (a JAX platform name; None: JAX's default)."""
+    per-item label fields the simulation fills, :data:`CHUNK_FIELDS`, and ``ball_iterations``:
+    the Newton count each item's micro-batch ran with).  A pure function of (plan, k): every
+    item's draws come from its own key and every program runs on micro-batches of the fixed
+    width ``plan.width`` (the chunk padded to a multiple of it with its last item; only the
+    micro-batches holding items run), so the in-process loop, any chunk size that is a multiple
+    of the width and any Dask worker give the same bytes on the same device type.  Runs on
+    ``plan.device`` (a JAX platform name; None: JAX's default)."""
     import contextlib
 
     import jax
 
     idx = plan.items(k)
     m = idx.size
-    pad = np.concatenate([idx, np.repeat(idx[-1:], plan.chunk - m)])
+    W = plan.width
+    pad = np.concatenate([idx, np.repeat(idx[-1:], -(-m // W) * W - m)])
     where = jax.default_device(jax.devices(plan.device)[0]) if plan.device else contextlib.nullcontext()
     with where:
         out = device_program(plan, pad)
@@ -248,10 +288,11 @@ def pit_depths_batch(shared, idx):
     return out, ok, unbridged
 
 
-def run_settings(physics, lab, extent, depth, center, fs):
-    """(ball Newton steps, substeps) for the whole data set: :func:`dynamics.batch_settings` on
-    the extreme items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and
-    least loaded, largest defect), the largest count, fixed once so that no chunk recompiles."""
+def run_settings(physics, lab, extent, depth, center, fs) -> int:
+    """Substeps per sample for the whole data set: :func:`dynamics.batch_settings` on the extreme
+    items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and least
+    loaded, largest defect), the largest, fixed once so that no chunk recompiles.  (The Newton
+    step count is chosen per micro-batch inside the chunk program.)"""
     from ..defect import Spall
     from ..jones import load_vector
     from ..kinematics import Operation
@@ -263,7 +304,7 @@ def run_settings(physics, lab, extent, depth, center, fs):
     load = lab["radial_N"] + lab["axial_N"]
     size = np.asarray(extent, float) * np.asarray(depth, float)
     check = dynamics.extreme_items(lab["fault_class"], lab["speed_rpm"], load, size)
-    its, subs = [], []
+    subs = []
     for i in check:
         op = Operation.from_rpm(float(lab["speed_rpm"][i]), ph.control, True, True)
         F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
@@ -271,7 +312,5 @@ def run_settings(physics, lab, extent, depth, center, fs):
                          float(depth[i]) if L == loc[i] else 0.0, ph.profile, L, 0) for L in slots)
         it, sub = dynamics.batch_settings(ph.bearing, op, F, sp, ph.cage_angle, fs, ph.params, ph.hertz_method)
         if it is not None:
-            its.append(it)
             subs.append(sub)
-    it = dynamics.next_iterations(its)
-    return it, max(subs, default=1)
+    return max(subs, default=1)

@@ -25,12 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from ..case import check_sampling
-from ..case.units import from_si
 from ..errors import BearingsimError, InputError
-from .program import (CHUNK_FIELDS, Physics, background_spec, pit_depths, run_settings, simulate_chunk)
+from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
-from .writer import (assemble, finished_chunks, open_partial, partial_path, spec_record, chunk_path,
+from .writer import (assemble, finished_chunks, open_partial, partial_path, read_chunk, spec_record, chunk_path,
                      write_chunk)
 
 __all__ = ["ChunkPlan", "Interrupted", "serial_imap", "make_dataset", "resolve_device", "default_chunk",
@@ -118,27 +117,27 @@ def default_chunk(dev, samples, count) -> int:
 class ChunkPlan:
     """Everything the chunks of one data set need, built and drawn before any chunk runs: the
     physics objects (no case file), the labels and the per-item inputs (picklable: a Dask run
-    sends it once to every worker).  ``simulate_chunk(plan, k)`` is chunk ``k``; every chunk pads
-    to ``chunk`` items, so every chunk is the same compiled program."""
+    sends it once to every worker; the compiled programs are built in each process,
+    :func:`bearingsim.dataset.program.plan_program`).  ``simulate_chunk(plan, k)`` is chunk
+    ``k``: a loop over its micro-batches of ``width`` items, each the same compiled programs."""
 
     physics: Physics
     lab: np.ndarray
     order: np.ndarray
-    chunk: int
+    chunk: int                      # items per chunk: a multiple of width
     loc: np.ndarray
     center: np.ndarray
     extent: np.ndarray
-    depth: np.ndarray
+    depth: np.ndarray               # machined depth (m); with pit, > 0 marks the fault items
     duration: float
     fs: float
-    ball_iterations: object
     substeps: int
     slots: tuple
-    pit_ok: np.ndarray
-    unbridged: np.ndarray
-    modes: np.ndarray = None        # (N, M, 3) every item's sensor modes (transfer_paths)
-    background: object = None       # program.BackgroundSpec or None
-    fault_snr: bool = False         # dataset.fault_snr_dB given
+    modes: np.ndarray               # (N, M, 3) every item's sensor modes (transfer_paths)
+    signal: object                  # signal_stage.SignalSettings (static)
+    pit: bool = False               # depth_rule "pit": the effective depths inside the chunk program
+    unbridged: np.ndarray = None    # depth_rule "machined" with pass variability: host pit_depths' fractions
+    width: int = 16                 # micro-batch width W of every program call (program.micro_batch)
     device: str = None              # JAX platform ("cpu", "gpu"); None: the worker's default
 
     @property
@@ -148,6 +147,23 @@ class ChunkPlan:
     def items(self, k) -> np.ndarray:
         """Item indices of chunk ``k`` (the classes spread evenly over the chunks)."""
         return self.order[k * self.chunk:(k + 1) * self.chunk]
+
+
+def signal_settings(case, ds, fs, T, physics):
+    """The :class:`bearingsim.signal_stage.SignalSettings` of the case's [dataset] (static)."""
+    from ..signal_stage import SignalSettings
+
+    machine = None
+    if ds.get("background", "none") == "machine":
+        from ..background import Background
+        sec = case.si("background") if "background" in case.data else {}
+        machine = Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
+                             tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
+                             tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels") or ()),
+                             tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
+                             float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
+                             float(sec.get("knock_damping_ratio", 0.05)))
+    return SignalSettings.from_dataset(ds, fs, T, physics.realism, physics.params.modes(), machine)
 
 
 def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=None,
@@ -186,6 +202,8 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     n = lab.size
     chunk = ds.get("chunk", 16) if chunk is None else chunk
     chunk = default_chunk(dev, T, n) if chunk in (0, "auto") else min(int(chunk), n)
+    width = micro_batch(dev.platform)
+    chunk = -(-chunk // width) * width              # a whole number of micro-batches
     slots = slots_of(lab)
     loc, extent, depth, center = defect_geometry(ph.bearing, lab)
     folder = partial_path(path)
@@ -196,32 +214,31 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     where = jax.default_device(dev) if runner is None else contextlib.nullcontext()
     try:
         with _signals_stop(), where:
-            pit_ok, unbridged = np.ones(n, bool), np.zeros(n)
-            if ds.get("depth_rule", "machined") == "pit" or ph.realism.pass_variation:
-                pit, pit_ok, unbridged = pit_depths(ph, lab, chunk, slots, imap=imap)
-                if ds.get("depth_rule", "machined") == "pit":
-                    depth = pit
-            lab["unbridged_fraction"] = unbridged
-            lab["effective_depth_mm"] = from_si(depth, "mm")
+            pit = ds.get("depth_rule", "machined") == "pit"
+            unbridged = None
+            if not pit and ph.realism.pass_variation:   # the host twin: the machined depth is simulated
+                _, pit_ok, unbridged = pit_depths(ph, lab, chunk, slots, imap=imap)
+                unbridged = np.where(pit_ok, unbridged, 0.0)
             lab["slip_percent"] = ph.realism.slip_percent
             lab["speed_fluctuation_percent"] = ph.realism.speed_fluctuation_percent
             lab["noise_rms_m_s2"] = ph.realism.noise_rms
             modes = transfer_paths(case, lab)
             chunks = -(-n // chunk)
-            it, sub = open_partial(folder, spec, lambda: run_settings(ph, lab, extent, depth, center, fs))
+            sub = open_partial(folder, spec, lambda: run_settings(ph, lab, extent, depth, center, fs))
             todo = [k for k in range(chunks) if not chunk_path(folder, k).exists()]
             done = n - sum(min(chunk, n - k * chunk) for k in todo)
             bar = tqdm(total=n, initial=done, desc=f"dataset ({dev.platform})", unit="item",
                        disable=None if progress else True, dynamic_ncols=True)
             plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
-                             duration, fs, it, sub, slots, pit_ok, unbridged, modes, background_spec(case, ds),
-                             "fault_snr_dB" in ds, dev.platform)
+                             duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
+                             width, dev.platform)
             for k, out in imap(simulate_chunk, plan, todo):     # finished chunks, streamed
                 write_chunk(folder, k, out)
                 done += out["index"].size
                 bar.update(out["index"].size)
                 del out
             bar.close()
+            it = max(int(np.max(read_chunk(folder, k, "ball_iterations"), initial=1)) for k in range(chunks))
             assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, "newmark", chunks, modes,
                      CHUNK_FIELDS, compression)
             shutil.rmtree(folder, ignore_errors=True)

@@ -21,6 +21,7 @@ from .. import dynamics
 from ..case.units import to_si
 from ..defect import LOCATIONS
 from ..errors import InputError, ResultCode
+from ..keys import STREAMS
 
 __all__ = ["LABEL_FIELDS", "LABEL_DTYPE", "SPLITS", "CLASSES", "RANGES", "CLASS_RANGES", "FIELD_STREAMS",
            "DatasetResult", "DatasetSummary", "result_messages", "settings", "class_counts", "class_of_index",
@@ -75,11 +76,11 @@ CLASSES = ("healthy",) + LOCATIONS
 CLASS_RANGES = {"healthy": RANGES[3:], "outer": RANGES[3:],
                 "inner": ("inner_length_mm", "inner_depth_mm", "inner_center_deg"),
                 "ball": ("ball_length_mm", "ball_depth_mm", "ball_spin_angle_deg")}
-#: label -> the sub-key id of its draw (``fold_in(item key, id)``); never renumber (the data set
+#: label -> the sub-key id of its draw (``fold_in(item key, id)``): from :data:`bearingsim.keys.STREAMS`; never renumber (the data set
 #: version would change), add new ids at the end
-FIELD_STREAMS = {"speed_rpm": 0, "radial_N": 1, "axial_N": 2, "spall_length_mm": 3, "spall_depth_mm": 4,
-                 "spall_center_deg": 5, "outer_position": 6, "signal_gain": 7, "snr_dB": 8,
-                 "strike_probability": 9, "split": 10, "realism_seed": 11, "transfer_path": 12}
+FIELD_STREAMS = {k: STREAMS[k] for k in ("speed_rpm", "radial_N", "axial_N", "spall_length_mm", "spall_depth_mm",
+                                         "spall_center_deg", "outer_position", "signal_gain", "snr_dB",
+                                         "strike_probability", "split", "realism_seed", "transfer_path")}
 
 
 def _result_members():
@@ -166,13 +167,9 @@ def _cpu():
 def item_keys(seed, n, start=0) -> np.ndarray:
     """(n, 2) uint32: the raw key data of items ``start .. start + n - 1``,
     ``jax.random.fold_in(jax.random.PRNGKey(seed), index)``."""
-    import jax
-    import jax.numpy as jnp
+    from .. import keys as keys_mod
     with _cpu():
-        base = jax.random.PRNGKey(int(seed))
-        keys = jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(start, start + n, dtype=jnp.uint32))
-        return np.asarray(jax.random.key_data(keys) if jnp.issubdtype(keys.dtype, jax.dtypes.prng_key)
-                          else keys).astype(np.uint32)
+        return np.asarray(keys_mod.item_keys(seed, np.arange(start, start + n))).astype(np.uint32)
 
 
 def _u(k, lo, hi):

@@ -33,9 +33,10 @@ __all__ = ["CHUNK_FORMAT", "COMPRESSIONS", "DEFAULT_COMPRESSION", "partial_path"
            "write_chunk", "read_chunk", "finished_chunks", "spec_record", "open_partial", "assemble",
            "compression_options"]
 
-#: layout of the chunk files (4: a folder of .npy arrays per chunk; items drawn from keys); a
+#: layout of the chunk files (4: a folder of .npy arrays per chunk; items drawn from keys; 5: one
+#: registry of streams, the chunk on the device, pit labels and ball_iterations per item); a
 #: partial folder of another layout is refused like one of another spec
-CHUNK_FORMAT = 4
+CHUNK_FORMAT = 5
 #: codecs of /signals: name -> h5py create_dataset keywords
 COMPRESSIONS = {"none": {}, "lzf": {"compression": "lzf"}, "gzip": {"compression": "gzip", "compression_opts": 4},
                 "gzip1": {"compression": "gzip", "compression_opts": 1}, "zstd": None}
@@ -107,7 +108,8 @@ def spec_record(case, ds, n, T, fs, chunk):
 
 
 def open_partial(folder: Path, spec: dict, settings):
-    """The partial folder of this spec (created if absent) and its (ball_iterations, substeps)."""
+    """The partial folder of this spec (created if absent) and its substeps (``settings()`` the
+    first time)."""
     f = folder / "spec.json"
     if f.exists():
         try:
@@ -117,11 +119,11 @@ def open_partial(folder: Path, spec: dict, settings):
         if old is None or {k: old.get(k) for k in spec} != spec:
             raise InputError(f"{folder} holds the finished chunks of a run with a different spec (or "
                              "bearingsim version); delete it to start afresh, or write elsewhere")
-        return old["ball_iterations"], old["substeps"]
-    it, sub = settings()
+        return old["substeps"]
+    sub = settings()
     folder.mkdir(parents=True, exist_ok=True)
-    write_atomic(f, lambda fh: fh.write(json.dumps(dict(spec, ball_iterations=it, substeps=sub)).encode()))
-    return it, sub
+    write_atomic(f, lambda fh: fh.write(json.dumps(dict(spec, substeps=sub)).encode()))
+    return sub
 
 
 def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chunks, modes, fields,
@@ -139,7 +141,6 @@ def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chun
         idx = read_chunk(folder, k, "index")
         for name in fields:
             lab[name][idx] = read_chunk(folder, k, name)
-    lab["ftf_Hz"] = lab["bpfo_Hz"] / Z
     lab["shaft_Hz"] = from_si(to_si(lab["speed_rpm"], "rpm"), "rev_s")
     units = {k: u for k, (_, u) in LABEL_FIELDS.items()}
     with io.atomic_path(path) as tmp:

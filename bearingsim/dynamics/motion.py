@@ -35,6 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..defect import as_defects
+from ..keys import STREAMS
 from .parameters import Realism
 
 __all__ = ["Motion", "seed_streams", "draw_motion", "motion_at", "defect_phase", "defect_edge_times", "DeviceMotion",
@@ -242,7 +243,7 @@ class DeviceMotion(NamedTuple):
 
 #: the item key's stream the motion is drawn from (``jax.random.fold_in(key, MOTION_STREAM)``);
 #: the signal stage folds in other numbers (>= 2) for its own draws
-MOTION_STREAM = 1
+MOTION_STREAM = STREAMS["motion"]
 
 #: slip knots drawn before the run's start (progress never falls below its value at t = 0 by
 #: more than the fluctuation's excursion: 1 + 4 a < 2 pitches for a < 0.25)

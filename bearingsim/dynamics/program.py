@@ -33,6 +33,7 @@ from .. import sensor as sensor_mod
 from ..defect import LOCATIONS, Spall
 from ..hertz import stiffness_curve
 from ..jones import solve_state
+from ..keys import item_keys
 from ..kinematics import Operation, defect_frequencies
 from ..pit import pit_of_solution_device
 from ..xla import jit
@@ -48,15 +49,6 @@ __all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program"
 
 #: the Newton step counts a chunk's time loop is compiled with (one program each, when first used)
 MENU = (1, 2, 4, 8, 16)
-
-
-def item_keys(seed, index):
-    """The items' ``jax.random`` keys as raw (N, 2) uint32 data: ``fold_in(key(seed), index)``,
-    so an item's key (and every draw from it) depends only on (seed, index), not on the chunk
-    it falls in."""
-    base = jax.random.PRNGKey(int(seed))
-    idx = jnp.asarray(index, jnp.uint32)
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(idx)
 
 
 def frequencies_device(bearing, speed, sol):
