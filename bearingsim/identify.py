@@ -38,7 +38,7 @@ from .names import noun_module
 from .features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from .records import MIN_SECONDS, check_record, read_record
 
-__all__ = ["BANK_FS", "BANK_WINDOW_S", "BANK_SEED", "BANK_COUNT", "SLIP_MAX", "LEVEL", "CLASSES",
+__all__ = ["bank_name", "BANK_FS", "BANK_WINDOW_S", "BANK_SEED", "BANK_COUNT", "SLIP_MAX", "LEVEL", "CLASSES",
            "Identification", "Identifier", "bank_spec", "build_bank", "bank_features", "train_identifier",
            "default_identifier", "identify", "identify_file", "clipped_fraction", "identification_to_dict",
            "identification_text", "twin_spec", "twin_record", "bank_twins", "plot_identification",
@@ -78,11 +78,19 @@ def cache_dir() -> Path:
     return Path(d) if d else Path.home() / ".cache" / "bearingsim"
 
 
+def bank_name(count, seed) -> str:
+    """The cached bank's file name: its size and seed, and the data set format it was simulated
+    with (a bank from an older engine, whose random streams or physics differ, is not reused)."""
+    from .dataset import CHUNK_FORMAT
+
+    return f"identify_bank_{count}_{seed}_v{CHUNK_FORMAT}.h5"
+
+
 def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Path:
     """Simulate the bank (``count`` items, ``seed``) into ``path`` (HDF5) unless it is there."""
     from .dataset import make_dataset
 
-    path = Path(path) if path is not None else cache_dir() / f"identify_bank_{count}_{seed}.h5"
+    path = Path(path) if path is not None else cache_dir() / bank_name(count, seed)
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         make_dataset(bank_spec(count, seed), path, progress=progress)
@@ -228,10 +236,10 @@ _DEFAULT = {}
 
 def default_identifier(count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Identifier:
     """The identifier of the default bank: the file $BEARINGSIM_IDENTIFY_BANK when set, else
-    ``identify_bank_<count>_<seed>.h5`` in :func:`cache_dir` (simulated on first use: a few
+    ``identify_bank_<count>_<seed>_v<format>.h5`` in :func:`cache_dir` (simulated on first use: a few
     minutes, with a progress bar)."""
     env = os.environ.get("BEARINGSIM_IDENTIFY_BANK")
-    p = Path(env) if env else cache_dir() / f"identify_bank_{count}_{seed}.h5"
+    p = Path(env) if env else cache_dir() / bank_name(count, seed)
     key = str(p)
     if key not in _DEFAULT:
         if env and not p.exists():
