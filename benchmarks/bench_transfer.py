@@ -12,10 +12,8 @@
     records (normal included; targets >= 0.95, worst class >= 0.85, >= 95 % of the records right
     by majority vote), over the N-graded records (reported, not targeted), per class, per record.
     ``--ingredients`` (default: all of :data:`bearingsim.nuisance.INGREDIENTS`; ``none`` for the
-    spec as it is) adds issue 26's ingredients: until the data engine calls
-    :func:`bearingsim.nuisance.item_signal` inside its chunk program, the benchmark simulates the
-    bearing signal without background and composes every item with ``item_signal`` (vmapped,
-    keyed by the item's index) -- the same function, the same draws.
+    spec as it is) sets the spec's ``[dataset] realism_ingredients``: the data engine builds
+    them inside its device program (:func:`bearingsim.signal_stage.finish_items`).
 (b) The same with the data calibrated to the machine from the normal record alone
     (``bearingsim calibrate``), tested on the five records the calibration did not use
     (target >= 0.90), when the calibration workflow is available.
