@@ -1,8 +1,12 @@
 """bearingsim: angular contact ball bearings with localized defects.
 
-Pipeline: geometry -> hertz -> jones (+defect; shaft for sets) -> sweep -> dynamics -> signal ->
-data sets, with case/workflows/io/plots/cli at the edge (docs/architecture.md).  The core is pure
-JAX in float64 and knows nothing of files or printing.
+The folders show the flow (docs/architecture.md): ``physics`` (geometry -> hertz -> jones
+(+defect; shaft for sets) -> sweep, life, limits) -> ``dynamics`` -> ``signals`` (the sensor, the
+signal stage, envelope analysis) form the core, pure JAX in float64, knowing nothing of files or
+printing; ``case`` (case files), ``output`` (results files, reports, figures), ``datasets`` (data
+sets, their reader, scale-out), ``realism`` (real records: calibration, transfer, identification)
+and ``app`` (workflows, sets, the command line) are the edge.  Old flat paths
+(``bearingsim.jones``) still import, with a DeprecationWarning (:mod:`bearingsim.moved`).
 
 The nouns a user types are here, imported at first use: ``bearingsim.solve``, ``solve_set``,
 ``sweep``, ``simulate``, ``load_case``, ``solve_case``, ``make_dataset``, ``load_dataset``,
@@ -13,7 +17,7 @@ import sys as _sys
 
 if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "bearingsim" and "__mp_main__" not in _sys.modules:
     # the `bearingsim` command (not its Dask worker processes): Ctrl-C / SIGTERM while the
-    # libraries load (nothing is written yet) is one line and exit 130; bearingsim.cli.main
+    # libraries load (nothing is written yet) is one line and exit 130; bearingsim.app.cli.main
     # installs its own handlers once they are loaded
     import signal as _signal
 
@@ -30,47 +34,47 @@ from . import runtime as _runtime  # noqa: E402
 _runtime.configure()        # float64 and the persistent compilation cache, before JAX loads
 
 from ._version import __version__  # noqa: E402
+from . import moved as _moved  # noqa: E402
+
+_moved.install()            # the paths before the folders (bearingsim.jones, ...), deprecated
 
 #: the names a user types, and the module each comes from: imported at first use (PEP 562), so
 #: that ``import bearingsim`` and ``bearingsim --help`` do not load JAX.  The edge's nouns
 #: (``load_case``, ``make_dataset``, ``load_dataset``, ``identify``) are named here too: a string
-#: is no import, so ``import bearingsim`` still loads no edge module.  ``sweep`` and ``identify``
-#: are modules that answer to their noun: ``bearingsim.sweep(...)`` calls ``sweep.sweep``
-#: whether or not the module was imported before.
+#: is no import, so ``import bearingsim`` still loads no edge module.
 _EXPORTS = {
-    "geometry": ("Bearing", "Material", "STEEL", "SILICON_NITRIDE"),
-    "hertz": ("ellipk_ellipe", "ellipticity", "contact_constant", "hertz_contact", "HertzContact",
+    "physics.geometry": ("Bearing", "Material", "STEEL", "SILICON_NITRIDE"),
+    "physics.hertz": ("ellipk_ellipe", "ellipticity", "contact_constant", "hertz_contact", "HertzContact",
               "dimensionless_hertz"),
-    "kinematics": ("Operation", "ball_kinematics", "defect_frequencies", "DefectFrequencies"),
-    "defect": ("Spall", "NO_SPALL", "depth_profile", "contact_depths"),
+    "physics.kinematics": ("Operation", "ball_kinematics", "defect_frequencies", "DefectFrequencies"),
+    "physics.defect": ("Spall", "NO_SPALL", "depth_profile", "contact_depths"),
     "errors": ("BearingsimError", "InputError", "NotConvergedError", "InvalidStateError", "OutputError"),
-    "balls": ("BallState", "balls_at", "reactions_from_balls"),
-    "jones": ("JonesSolution", "RESULTS", "OverloadWarning", "solve", "solve_state", "solve_batch",
+    "physics.balls": ("BallState", "balls_at", "reactions_from_balls"),
+    "physics.jones": ("JonesSolution", "RESULTS", "OverloadWarning", "solve", "solve_state", "solve_batch",
               "ring_reactions", "load_vector", "Loads"),
-    "shaft": ("BearingSet", "SetSolution", "solve_set", "solve_set_batch"),
-    "sweep": ("sweep", "sweep_chunked"),
-    "life": ("rating_life",),
-    "limits": ("contact_limits",),
+    "physics.shaft": ("BearingSet", "SetSolution", "solve_set", "solve_set_batch"),
+    "physics.sweep": ("sweep", "sweep_chunked"),
+    "physics.life": ("rating_life",),
+    "physics.limits": ("contact_limits",),
     "dynamics": ("simulate", "simulate_batch", "DynamicsParameters", "DynamicsResult"),
     "case": ("load_case", "Case"),
-    "workflows": ("solve_case", "sweep_case", "study_case", "simulate_case"),
-    "dataset": ("make_dataset",),
-    "mldata": ("load_dataset", "WindowDataset"),
-    "identify": ("identify",),
+    "app.workflows": ("solve_case", "sweep_case", "study_case", "simulate_case"),
+    "datasets.runner": ("make_dataset",),
+    "datasets.mldata": ("load_dataset", "WindowDataset"),
+    "realism.identify": ("identify",),
 }
 _WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
 
 
 def __getattr__(name):
-    mod = _WHERE.get(name)
-    if mod is None:
-        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
     import importlib
 
-    module = importlib.import_module(f".{mod}", __name__)
-    # a module that answers to its own noun (sweep, identify) stays the module: Python sets the
-    # package's attribute to the submodule whenever it is first imported
-    value = module if name == mod else getattr(module, name)
+    mod = _WHERE.get(name)
+    if mod is None:
+        if _moved.new_path(f"{__name__}.{name}") is not None:    # bearingsim.jones: deprecated
+            return importlib.import_module(f".{name}", __name__)
+        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{mod}", __name__), name)
     globals()[name] = value
     return value
 

@@ -17,15 +17,15 @@ __all__ = ["STREAMS", "item_keys", "stream_key"]
 
 #: name -> sub-stream number (``fold_in(item key, number)``); all distinct
 STREAMS = {
-    # the label draws of bearingsim.dataset.spec
+    # the label draws of bearingsim.datasets.spec
     "speed_rpm": 0, "radial_N": 1, "axial_N": 2, "spall_length_mm": 3, "spall_depth_mm": 4,
     "spall_center_deg": 5, "outer_position": 6, "signal_gain": 7, "snr_dB": 8, "strike_probability": 9,
     "split": 10, "realism_seed": 11, "transfer_path": 12,
     # the dynamics (bearingsim.dynamics.motion: slip walk, speed fluctuation)
     "motion": 13,
-    # the signal stage (bearingsim.signal_stage)
+    # the signal stage (bearingsim.signals.signal_stage)
     "noise": 14, "passes": 15, "strike": 16, "background": 17, "randomisation": 18, "transfer": 19,
-    # issue 26's ingredients (bearingsim.nuisance)
+    # issue 26's ingredients (bearingsim.signals.nuisance)
     "nuisance": 20,
 }
 assert len(set(STREAMS.values())) == len(STREAMS), "stream numbers must be distinct"

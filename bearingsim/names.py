@@ -1,8 +1,8 @@
 """The names every layer shares, importable without JAX (the command line's parser builds its
 choices from them before any JAX import): the defect locations, in the order of the fault classes.
 
-``bearingsim.defect.LOCATIONS`` is this tuple; the data set classes are ``("healthy",) +
-LOCATIONS`` (``bearingsim.dataset.CLASSES``)."""
+``bearingsim.physics.defect.LOCATIONS`` is this tuple; the data set classes are ``("healthy",) +
+LOCATIONS`` (``bearingsim.datasets.CLASSES``)."""
 
 #: where a localized defect can be: a spall on the outer or the inner raceway, a pit on a ball
 LOCATIONS = ("outer", "inner", "ball")
@@ -12,7 +12,7 @@ __all__ = ["LOCATIONS", "noun_module"]
 
 def noun_module(module_name: str, noun: str):
     """Make module ``module_name`` answer to its ``noun``: calling the module calls its function of
-    that name (``bearingsim.sweep(...)`` is ``bearingsim.sweep.sweep(...)``).  The package exports
+    that name (``bearingsim.sweep(...)`` is ``bearingsim.physics.sweep.sweep(...)``).  The package exports
     these nouns; Python rebinds ``bearingsim.<name>`` to the submodule whenever it is imported, so
     the module itself must answer.  Called at the end of the module."""
     import sys

@@ -16,7 +16,7 @@ import tempfile
 SNIPPET = r"""
 import json, time, numpy as np, jax
 import bearingsim as bs
-from bearingsim.sweep import sweep
+from bearingsim.physics.sweep import sweep
 b = bs.Bearing(16, 22.225e-3, 125.26e-3, 0.5232, 0.5232, np.radians(40.0))
 op = bs.Operation.from_rpm(10000.0)
 F = bs.Loads(axial=10000.0, radial_x=3000.0)

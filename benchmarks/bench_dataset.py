@@ -36,7 +36,7 @@ def _env():
 
 def command(args, tmp):
     """Wall seconds and peak RSS (bytes) of ``bearingsim ARGS`` in a fresh process."""
-    code = ("import resource, sys; from bearingsim.cli import main; rc = main(sys.argv[1:]); "
+    code = ("import resource, sys; from bearingsim.app.cli import main; rc = main(sys.argv[1:]); "
             "print('RSS', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024); sys.exit(rc)")
     t0 = time.perf_counter()
     p = subprocess.run([PY, "-c", code, *args], env=_env(), cwd=tmp, capture_output=True, text=True)
@@ -64,7 +64,7 @@ def codecs(n_items, T=4800):
     import h5py
     from scipy.signal import lfilter
 
-    from bearingsim.dataset.writer import COMPRESSIONS, compression_options
+    from bearingsim.datasets.writer import COMPRESSIONS, compression_options
     from bearingsim.errors import InputError
     rng = np.random.default_rng(0)
     x = rng.standard_normal((n_items, T))

@@ -8,7 +8,7 @@
       ratio is conservative), the resonator applied afterwards as in bearingsim: ratio (target
       >= 50 x).  Simulates --scipy-duration s and scales;
   (c) the data set spec cases/dataset_cwru.toml (1000 items of 0.1 s, realism as in the spec)
-      through bearingsim.dataset.make_dataset, after a compile run: wall time (target <= 60 s)
+      through bearingsim.datasets.make_dataset, after a compile run: wall time (target <= 60 s)
       and peak RSS (target <= 2 GB);
   (d) compile time of a simulation with an empty compilation cache (a fresh process; target
       <= 10 s): first call minus a second call.
@@ -111,7 +111,7 @@ _DATASET_SNIPPET = """
 import json, pathlib, resource, sys, tempfile, time
 import bearingsim
 from bearingsim.case import load_case
-from bearingsim.dataset import make_dataset
+from bearingsim.datasets import make_dataset
 rss = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 spec = load_case(pathlib.Path(sys.argv[1]))
 count = int(sys.argv[2])

@@ -30,9 +30,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from bearingsim.calibration import find_realdata  # noqa: E402
-from bearingsim.dataset import make_dataset  # noqa: E402
-from bearingsim.identify import (BANK_SEED, BANK_WINDOW_S, CLASSES, bank_features, bank_spec, build_bank,  # noqa: E402
+from bearingsim.realism.calibration import find_realdata  # noqa: E402
+from bearingsim.datasets import make_dataset  # noqa: E402
+from bearingsim.realism.identify import (BANK_SEED, BANK_WINDOW_S, CLASSES, bank_features, bank_spec, build_bank,  # noqa: E402
                                  identify, identify_file, train_identifier)
 
 SPEC = "dataset_cwru_4class"
@@ -180,13 +180,13 @@ def main(argv=None):
         identify_file(rec, SPEC, identifier=ident)
         t_ident = time.perf_counter() - t1
         env = dict(os.environ, BEARINGSIM_IDENTIFY_BANK=str(bank), PYTHONPATH=str(ROOT))
-        subprocess.run([sys.executable, "-m", "bearingsim.cli", "identify", str(rec), "--case", SPEC],
+        subprocess.run([sys.executable, "-m", "bearingsim.app.cli", "identify", str(rec), "--case", SPEC],
                        env=env, capture_output=True)               # warm the identifier pickle
         import resource
 
         c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t1 = time.perf_counter()
-        p = subprocess.run([sys.executable, "-m", "bearingsim.cli", "identify", str(rec), "--case", SPEC],
+        p = subprocess.run([sys.executable, "-m", "bearingsim.app.cli", "identify", str(rec), "--case", SPEC],
                            env=env, capture_output=True, text=True)
         t_cmd = time.perf_counter() - t1
         c1 = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -44,13 +44,13 @@ class Timed:
     the chunk file) and when it arrived."""
 
     def __init__(self, runner=None):
-        from bearingsim.dataset import serial_imap
+        from bearingsim.datasets import serial_imap
 
         self.imap_of = runner.imap if runner is not None else serial_imap
         self.client_s, self.arrivals, self.sizes = [], [], []
 
     def imap(self, fn, shared, items):
-        from bearingsim.dataset import simulate_chunk
+        from bearingsim.datasets import simulate_chunk
 
         if fn is simulate_chunk:
             self.t_call = time.perf_counter()
@@ -68,8 +68,8 @@ class Timed:
 
 
 def run(case, out, workers=None, timed=None):
-    from bearingsim.dataset import make_dataset
-    from bearingsim.distributed import DaskRunner
+    from bearingsim.datasets import make_dataset
+    from bearingsim.datasets.distributed import DaskRunner
 
     t0, c0 = time.perf_counter(), cpu()
     if workers is None:
@@ -95,9 +95,9 @@ def client_memory(n, tmp):
     code = f"""
 import resource, sys, time
 import numpy as np
-import bearingsim.dataset as dsm
+import bearingsim.datasets as dsm
 from bearingsim.case import load_case
-from bearingsim.distributed import DaskRunner
+from bearingsim.datasets.distributed import DaskRunner
 
 def cheap_pits(shared, idx):
     return np.full(idx.size, 1e-5), np.ones(idx.size, bool), np.full(idx.size, 0.5)

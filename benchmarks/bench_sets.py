@@ -1,11 +1,11 @@
-"""Bearing-set benchmark (issue 21): the shaft solve on N bearings (bearingsim.shaft).
+"""Bearing-set benchmark (issue 21): the shaft solve on N bearings (bearingsim.physics.shaft).
 
 Harris 218 DB pair, 40 mm apart, rigid preload 2000 N (set solve, MODEL.md 10).
 
   (a) scipy reference (benchmarks/reference_scipy.py: solve_set, every ball of both bearings and
       the shaft in one hybr system from the static solution), one cold solve per load case at
       10 000 rpm, averaged over N_REF load cases;
-  (b) bearingsim.shaft.solve_set_batch on (N_BATCH, 5) load cases at 10 000 rpm, time per state
+  (b) bearingsim.physics.shaft.solve_set_batch on (N_BATCH, 5) load cases at 10 000 rpm, time per state
       after compilation; agreement with (a) on the same cases (max relative difference);
   (c) a speed study of the DB pair: 200 speeds 0..15 000 rpm with the offset fixed at standstill
       (rigid preload), FIRST call in a fresh process with an EMPTY compilation cache (run in a
@@ -42,7 +42,7 @@ import time
 t0 = time.perf_counter()
 import jax.numpy as jnp, numpy as np
 import bearingsim as bs
-from bearingsim import shaft
+from bearingsim.physics import shaft
 b = bs.Bearing(16, 22.225e-3, 125.26e-3, 0.5232, 0.5232, np.deg2rad(40.0))
 bset = shaft.BearingSet.arrangement("DB", b, 0.04, 2000.0)
 speeds = jnp.linspace(0.0, 15000.0, 200)
@@ -75,7 +75,7 @@ def main(argv=None):
     import jax
     import jax.numpy as jnp
     import bearingsim as bs
-    from bearingsim import shaft
+    from bearingsim.physics import shaft
 
     g = ref.HARRIS_218
     loads = load_cases(args.n_batch)

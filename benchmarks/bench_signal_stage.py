@@ -1,6 +1,6 @@
 """The data set's signal stage: the host loop of today (per item: pass variation and the sensor
-modes, bearingsim.dynamics.vary_sensor; the background, bearingsim.background; the SNR scaling
-of dataset._simulate_chunk) against bearingsim.signal_stage.finish_items (one jitted program for
+modes, bearingsim.dynamics.vary_sensor; the background, bearingsim.signals.background; the SNR scaling
+of dataset._simulate_chunk) against bearingsim.signals.signal_stage.finish_items (one jitted program for
 the chunk).  Usage: python benchmarks/bench_signal_stage.py [items] [samples]; prints the device."""
 import sys
 import time
@@ -9,8 +9,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bearingsim import background as bgm
-from bearingsim import signal_stage as ss
+from bearingsim.signals import background as bgm
+from bearingsim.signals import signal_stage as ss
 from bearingsim.dynamics import Realism, vary_sensor
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 1000

@@ -24,7 +24,7 @@ _spec.loader.exec_module(ref)
 import jax  # noqa: E402
 
 import bearingsim as bs  # noqa: E402
-from bearingsim.sweep import sweep  # noqa: E402
+from bearingsim.physics.sweep import sweep  # noqa: E402
 
 DEG = np.pi / 180
 

@@ -6,14 +6,14 @@
 
 (a) The shipped four-class spec (every realism ingredient on, domain randomisation: its own
     defaults), ``--count`` items of 0.2 s at 12 kHz, windows of 0.2 s; the two fixed classifiers
-    of :mod:`bearingsim.transfer` trained on those windows only, tested on the development set
-    (issue 26): the 26 12 kHz drive-end CWRU records of :data:`bearingsim.transfer.DEV_RECORDS`
+    of :mod:`bearingsim.realism.transfer` trained on those windows only, tested on the development set
+    (issue 26): the 26 12 kHz drive-end CWRU records of :data:`bearingsim.realism.transfer.DEV_RECORDS`
     with their Smith & Randall grades: balanced accuracy over every record, over the Y-graded
     records (normal included; targets >= 0.95, worst class >= 0.85, >= 95 % of the records right
     by majority vote), over the N-graded records (reported, not targeted), per class, per record.
-    ``--ingredients`` (default: all of :data:`bearingsim.nuisance.INGREDIENTS`; ``none`` for the
+    ``--ingredients`` (default: all of :data:`bearingsim.signals.nuisance.INGREDIENTS`; ``none`` for the
     spec as it is) sets the spec's ``[dataset] realism_ingredients``: the data engine builds
-    them inside its device program (:func:`bearingsim.signal_stage.finish_items`).
+    them inside its device program (:func:`bearingsim.signals.signal_stage.finish_items`).
 (b) The same with the data calibrated to the machine from the normal record alone
     (``bearingsim calibrate``), tested on the five records the calibration did not use
     (target >= 0.90), when the calibration workflow is available.
@@ -40,10 +40,10 @@ _HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(_HERE.parent))
 
 import bearingsim  # noqa: E402,F401  (float64)
-from bearingsim.calibration import find_realdata  # noqa: E402
+from bearingsim.realism.calibration import find_realdata  # noqa: E402
 from bearingsim.case import load_case  # noqa: E402
-from bearingsim.features import fault_orders  # noqa: E402
-from bearingsim.transfer import DEV_RECORDS, composed_dataset, dev_records, dev_text, transfer_benchmark  # noqa: E402
+from bearingsim.signals.features import fault_orders  # noqa: E402
+from bearingsim.realism.transfer import DEV_RECORDS, composed_dataset, dev_records, dev_text, transfer_benchmark  # noqa: E402
 
 #: real records any fit behind the shipped spec used (docs/calibrate_cwru.py: structure, slip,
 #: pass-to-pass variability; the shipped spec keeps only the slip and the variability)
@@ -73,7 +73,7 @@ _SPEED_SNIPPET = """
 import json, pathlib, resource, sys, tempfile, time
 import bearingsim
 from bearingsim.case import load_case
-from bearingsim.dataset import make_dataset
+from bearingsim.datasets import make_dataset
 rss = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 spec = load_case(sys.argv[1]).with_value("dataset.count", int(sys.argv[2])).with_value("dataset.duration_s", 0.1)
 with tempfile.TemporaryDirectory() as tmp:
@@ -90,7 +90,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--count", type=int, default=1000, help="simulated training items (0.2 s each)")
     ap.add_argument("--spec", default="dataset_cwru_4class")
-    ap.add_argument("--ingredients", default="all", help="comma list of bearingsim.nuisance.INGREDIENTS, 'all' or 'none'")
+    ap.add_argument("--ingredients", default="all", help="comma list of bearingsim.signals.nuisance.INGREDIENTS, 'all' or 'none'")
     ap.add_argument("--realdata", default=None, help="folder of the real records (default ../shared/realdata)")
     ap.add_argument("--no-calibrated", action="store_true", help="skip (b)")
     ap.add_argument("--speed-count", type=int, default=1000, help="items of (c); 0 skips it")
@@ -100,8 +100,8 @@ def main():
     if data_dir is None or not Path(data_dir).is_dir():
         print("(a), (b) skipped: the real records (../shared/realdata) are not here")
     else:
-        from bearingsim.nuisance import INGREDIENTS
-        from bearingsim.transfer import DEV_GRADES, dev_figures, diagnosable
+        from bearingsim.signals.nuisance import INGREDIENTS
+        from bearingsim.realism.transfer import DEV_GRADES, dev_figures, diagnosable
 
         ing = INGREDIENTS if args.ingredients == "all" else () if args.ingredients == "none" else \
             tuple(args.ingredients.split(","))
@@ -120,9 +120,9 @@ def main():
                   f"{fa.balanced_accuracy:.3f}")
         if not args.no_calibrated:
             try:
-                from bearingsim.machine import calibrated_transfer
+                from bearingsim.realism.machine import calibrated_transfer
             except ImportError:
-                print("(b) skipped: the calibration workflow (bearingsim.machine) is not available")
+                print("(b) skipped: the calibration workflow (bearingsim.realism.machine) is not available")
             else:
                 print("(b) " + calibrated_transfer(spec, data_dir, args.count).text())
     if args.speed_count > 0:

@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import bearingsim as bs
-from bearingsim import jones
+from bearingsim.physics import jones
 from bearingsim.xla import compiler_options
 
 GROUPS = [(z, c, p) for z, c in ((7, "outer"), (12, "inner"), (14, "outer"), (24, "equal"),
@@ -157,10 +157,10 @@ def verdicts(n=1000, seed=27, cli_sample=40, tmp=None):
     import warnings
     from pathlib import Path
 
-    from bearingsim import workflows
+    from bearingsim.app import workflows
     from bearingsim.case import parse_case
-    from bearingsim.cli import main as cli_main
-    from bearingsim.limits import contact_limits
+    from bearingsim.app.cli import main as cli_main
+    from bearingsim.physics.limits import contact_limits
 
     rng = np.random.default_rng(seed)
     rpm = rng.choice([0.0, 6000.0, 10000.0, 12000.0], n)

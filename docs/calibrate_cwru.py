@@ -17,11 +17,11 @@ A. Noise: RMS of the normal record 97 (48 kHz) and the band holding 90 % of its 
    Operating point: the axial load whose quasi-static BPFO order equals the mean measured order
    of 130 and 234 (3.593 vs the nominal 3.5848), at the assumed operating clearance -> axial_N.
 B. Pit physics: the effective depth of the 0.007 / 0.021 in EDM pits under the loaded ball's
-   contact ellipse (bearingsim.realism.pit_effective_depth) -> defect.depth_mm of each case.
+   contact ellipse (bearingsim.realism.rig_record.pit_effective_depth) -> defect.depth_mm of each case.
 C. One engine run per spall size (48 kHz, FIT_SEED): the housing acceleration, the pass times
    and the noise draw.  The sensor modes act after the ODE, so stages D-E re-use these runs.
 D. Mode shapes: least squares of log |H(f)|^2 PSD(a_h) to the smoothed spectra of 130 and 234
-   over 1.5-5.4 kHz (bearingsim.calibration.fit_modes), starting from the peaks of the
+   over 1.5-5.4 kHz (bearingsim.realism.calibration.fit_modes), starting from the peaks of the
    fault-over-normal spectrum -> resonance frequencies, damping ratios, relative gains.
 E. Level, damping scale and pass variability: Nelder-Mead on (overall gain, damping factor of
    each mode, cv_max, jitter_max) minimising the normalised target errors of the 12 kHz metrics
@@ -45,10 +45,10 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 import bearingsim as bs  # noqa: E402
-from bearingsim import calibration as cal  # noqa: E402
-from bearingsim import realism as rl  # noqa: E402
+from bearingsim.realism import calibration as cal  # noqa: E402
+from bearingsim.realism import rig_record as rl  # noqa: E402
 from bearingsim.case import load_case  # noqa: E402
-from bearingsim.signal import record_metrics  # noqa: E402
+from bearingsim.signals.envelope import record_metrics  # noqa: E402
 
 INCH = 25.4e-3
 SIZES = {0.007: REPO / "cases" / "cwru_6205_or007.toml", 0.021: REPO / "cases" / "cwru_6205.toml"}

@@ -9,21 +9,35 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "bearingsim"
 
-#: the edge: reads and writes files, converts units, draws, reports; everything else is the core
-EDGE = {"case", "io", "plots", "plots_signal", "cli", "workflows", "dataset", "report", "realism",
-        "calibration", "transfer", "machine", "records", "distributed", "budget", "sets", "mldata",
-        "record_spectrum", "identify"}
-#: the core modules the architecture names (a new module is core unless listed in EDGE)
-CORE = {"geometry", "hertz", "kinematics", "defect", "balls", "jones", "sweep", "dynamics", "signal", "errors", "xla", "fastmath",
-        "pit", "passes", "features", "background", "life", "limits", "background_fit", "shaft",
-        "signal_stage", "nuisance", "fault_size", "names", "newton", "keys"}
-INFRASTRUCTURE = {"__init__", "_version", "runtime"}
+#: the folders, in the order of the flow, and the folders each may import (besides itself and the
+#: top-level infrastructure).  The core (physics, signals, dynamics) imports nothing of the edge.
+FOLDERS = {
+    "physics": set(),
+    "signals": {"physics"},
+    "dynamics": {"physics", "signals"},
+    "case": {"physics"},
+    "output": {"physics", "signals", "dynamics", "case"},
+    "datasets": {"physics", "signals", "dynamics", "case", "output"},
+    "realism": {"physics", "signals", "dynamics", "case", "output", "datasets"},
+    "app": {"physics", "signals", "dynamics", "case", "output", "datasets", "realism"},
+}
+CORE = {"physics", "signals", "dynamics"}
+EDGE = set(FOLDERS) - CORE
+#: the top-level modules: start-up and the vocabulary every layer shares (no folder's module)
+INFRASTRUCTURE = {"__init__", "_version", "runtime", "moved", "errors", "names", "keys", "xla", "fastmath"}
 
 
 def stage(path: Path) -> str:
-    """Top-level module of a file under bearingsim/: bearingsim/case/schema.py -> "case"."""
+    """Folder of a file under bearingsim/ (bearingsim/case/schema.py -> "case"), or the module's
+    name for a top-level module (bearingsim/errors.py -> "errors")."""
     parts = path.relative_to(PACKAGE).with_suffix("").parts
     return parts[0]
+
+
+def module_name(path: Path) -> str:
+    """bearingsim/physics/jones.py -> "physics.jones"; bearingsim/errors.py -> "errors"."""
+    parts = path.relative_to(PACKAGE).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
 def dotted(path: Path) -> str:
@@ -51,7 +65,7 @@ def imports(path: Path, module: str | None):
             if target.split(".")[0] != "bearingsim":
                 continue
             for a in node.names:
-                # "from . import io" imports the module bearingsim.io
+                # "from . import io" imports the module bearingsim.output.io
                 sub = f"{target}.{a.name}"
                 if (PACKAGE.parent / Path(*sub.split("."))).with_suffix(".py").exists() or \
                         (PACKAGE.parent / Path(*sub.split("."))).is_dir():
@@ -66,24 +80,39 @@ def sources():
 
 def test_the_scanner_resolves_absolute_and_relative_imports(tmp_path):
     f = tmp_path / "t.py"
-    f.write_text("import numpy\nfrom bearingsim.jones import _solve, solve\nfrom bearingsim import io\n"
+    f.write_text("import numpy\nfrom bearingsim.physics.jones import _solve, solve\nfrom bearingsim.output import io\n"
                  "def g():\n    from ..errors import InputError\n    from .units import _x\n")
     assert [(t, n) for _, t, n in imports(f, "bearingsim.case.schema")] == [
-        ("bearingsim.jones", "_solve"), ("bearingsim.jones", "solve"), ("bearingsim.io", None),
+        ("bearingsim.physics.jones", "_solve"), ("bearingsim.physics.jones", "solve"), ("bearingsim.output.io", None),
         ("bearingsim.errors", "InputError"), ("bearingsim.case.units", "_x")]
     assert private_imports([f], lambda p: "bearingsim.case.schema") == [
-        f"{f}:2 imports bearingsim.jones._solve", f"{f}:6 imports bearingsim.case.units._x"]
+        f"{f}:2 imports bearingsim.physics.jones._solve", f"{f}:6 imports bearingsim.case.units._x"]
 
 
-def test_the_named_modules_exist():
-    found = {stage(p) for p in sources()}
-    assert EDGE <= found and CORE <= found and not (EDGE & CORE)
+def test_the_folders_show_the_flow():
+    """ls bearingsim/ shows the folders of the flow and the infrastructure only (issue 27 item 7)."""
+    top = {p.stem for p in PACKAGE.glob("*.py")}
+    folders = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert top == INFRASTRUCTURE, f"top-level modules outside the infrastructure: {sorted(top - INFRASTRUCTURE)}"
+    assert folders == set(FOLDERS), sorted(folders ^ set(FOLDERS))
+
+
+def test_each_folder_imports_only_the_folders_before_it():
+    bad = []
+    for p in sources():
+        own = stage(p)
+        allowed = (FOLDERS.get(own, set()) | {own} | INFRASTRUCTURE) if own not in INFRASTRUCTURE else INFRASTRUCTURE
+        for line, target, _ in imports(p, dotted(p)):
+            parts = target.split(".")
+            if len(parts) > 1 and parts[1] not in allowed:
+                bad.append(f"{p.relative_to(ROOT)}:{line} ({own}) imports {target}")
+    assert not bad, "imports against the flow:\n" + "\n".join(bad)
 
 
 def test_core_imports_nothing_from_the_edge():
     bad = []
     for p in sources():
-        if stage(p) in EDGE or stage(p) in INFRASTRUCTURE:
+        if stage(p) not in CORE:
             continue
         for line, target, _ in imports(p, dotted(p)):
             parts = target.split(".")
@@ -92,10 +121,45 @@ def test_core_imports_nothing_from_the_edge():
     assert not bad, "the core imports the edge:\n" + "\n".join(bad)
 
 
-def test_the_package_root_imports_only_the_core():
+def test_the_package_root_imports_only_the_infrastructure():
     init = PACKAGE / "__init__.py"
-    edge = [t for _, t, _ in imports(init, "bearingsim") if len(t.split(".")) > 1 and t.split(".")[1] in EDGE]
-    assert not edge, f"importing bearingsim pulls in the edge: {edge}"
+    found = [t for _, t, _ in imports(init, "bearingsim") if len(t.split(".")) > 1 and t.split(".")[1] not in INFRASTRUCTURE]
+    assert not found, f"importing bearingsim pulls in: {found}"
+
+
+def test_nothing_uses_an_old_path():
+    """The paths before the folders (bearingsim.jones, ...) still import for users, with a
+    DeprecationWarning (bearingsim.moved); the package, its tests, notebooks and benchmarks use
+    the new ones."""
+    import re
+
+    from bearingsim.moved import MOVED
+
+    old = re.compile(r"\bbearingsim\.(" + "|".join(re.escape(k) for k in sorted(MOVED, key=len, reverse=True))
+                     + r")\b(?!\s*\()")
+    bad = []
+    for d in ("bearingsim", "tests", "benchmarks", "notebooks", "docs"):
+        for p in sorted((ROOT / d).rglob("*")):
+            if p.suffix not in (".py", ".ipynb", ".md") or p.name in ("moved.py", "test_architecture.py") \
+                    or p == PACKAGE / "__init__.py":
+                continue
+            for k, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
+                if old.search(line):
+                    bad.append(f"{p.relative_to(ROOT)}:{k}: {line.strip()[:100]}")
+    assert not bad, "old module paths:\n" + "\n".join(bad)
+
+
+def test_an_old_path_is_the_same_module_with_a_warning():
+    import importlib
+    import sys
+
+    from bearingsim.physics import jones
+
+    sys.modules.pop("bearingsim.jones", None)
+    with pytest.warns(DeprecationWarning, match="bearingsim.physics.jones"):
+        old = importlib.import_module("bearingsim.jones")
+    assert old is jones
+    sys.modules.pop("bearingsim.jones", None)
 
 
 def private_imports(paths, module_of):
@@ -121,25 +185,31 @@ _MID_REFACTOR: dict = {}   # modules allowed to import private names while mid-r
 
 @pytest.mark.parametrize("name", [
     pytest.param(n, marks=pytest.mark.xfail(strict=False, reason=_MID_REFACTOR[n])) if n in _MID_REFACTOR else n
-    for n in sorted(EDGE | CORE | {p.stem for p in PACKAGE.glob("*.py")} - INFRASTRUCTURE)])
+    for n in sorted({module_name(p) for p in sources()})])
 def test_no_module_imports_private_names(name):
-    paths = [p for p in sources() if stage(p) == name]
+    paths = [p for p in sources() if module_name(p) == name]
     assert paths
     bad = private_imports(paths, dotted)
     assert not bad, "\n".join(bad)
 
 
 def module_graph():
-    """Top-level module -> the set of top-level bearingsim modules it imports (any depth)."""
+    """Module -> the set of bearingsim modules it imports (any depth in the file); a package's
+    __init__ counts as its folder's module (dynamics, case, datasets: one concept each)."""
+    def unit(dotted_name):
+        parts = dotted_name.split(".")[1:]
+        return ".".join(parts[:2]) if parts and parts[0] in FOLDERS and parts[0] not in ("dynamics", "case") \
+            else (parts[0] if parts else "")
+
     graph = {}
     for p in sources():
-        own = stage(p)
-        if own in INFRASTRUCTURE:
+        if stage(p) in INFRASTRUCTURE:
             continue
+        own = unit(dotted(p))
         for _, target, _ in imports(p, dotted(p)):
-            parts = target.split(".")
-            if len(parts) > 1 and parts[1] != own and parts[1] not in INFRASTRUCTURE:
-                graph.setdefault(own, set()).add(parts[1])
+            t = unit(target)
+            if t and t != own and t.split(".")[0] not in INFRASTRUCTURE and t not in FOLDERS:
+                graph.setdefault(own, set()).add(t)
     return graph
 
 
@@ -156,32 +226,33 @@ DATASET_FLOW = ("spec", "program", "writer", "runner")
 def test_the_dataset_package_shows_the_flow():
     """spec (labels) -> program (the device program) -> writer (chunk files, HDF5) -> runner
     (plan, device, in-process / Dask, make_dataset): no file imports a later one."""
-    files = {p.stem for p in (PACKAGE / "dataset").glob("*.py")} - {"__init__"}
-    assert files == set(DATASET_FLOW)
+    files = {p.stem for p in (PACKAGE / "datasets").glob("*.py")} - {"__init__"}
+    assert set(DATASET_FLOW) <= files
     for k, name in enumerate(DATASET_FLOW):
-        p = PACKAGE / "dataset" / f"{name}.py"
-        later = {f"bearingsim.dataset.{n}" for n in DATASET_FLOW[k + 1:]}
+        p = PACKAGE / "datasets" / f"{name}.py"
+        later = {f"bearingsim.datasets.{n}" for n in DATASET_FLOW[k + 1:]}
         bad = [t for _, t, _ in imports(p, dotted(p)) if t in later]
-        assert not bad, f"dataset/{name}.py imports a later stage: {bad}"
+        assert not bad, f"datasets/{name}.py imports a later stage: {bad}"
 
 
 def test_the_command_line_has_no_set_branch():
-    """Sets go through bearingsim.workflows like single bearings (issue 27 item 7): the workflow
+    """Sets go through bearingsim.app.workflows like single bearings (issue 27 item 7): the workflow
     entries dispatch on the case, so cli.py neither asks whether a case is a set nor imports the
     set edge module."""
-    path = PACKAGE / "cli.py"
+    path = PACKAGE / "app" / "cli.py"
     src = path.read_text(encoding="utf-8")
     assert "is_set" not in src
-    assert not [t for _, t, _ in imports(path, "bearingsim.cli") if t == "bearingsim.sets"]
+    assert not [t for _, t, _ in imports(path, "bearingsim.app.cli") if t == "bearingsim.app.sets"]
 
 
 def test_the_newton_machinery_lives_in_one_module():
     """The damped Newton's constants, step cap, step status and batch retry are defined once, in
-    bearingsim.newton, below jones and shaft (issue 27 item 7)."""
+    bearingsim.physics.newton, below jones and shaft (issue 27 item 7)."""
     shared = ("_LS_STEPS", "_FREE_STEPS", "_RING_CAP", "_BALL_CAP", "def _cap(", "def newton_step_status(",
               "n_pad = 1 <<", "def _traced(", "def _tolerances(")
     found = [f"{p.relative_to(ROOT)}: {s}" for p in sources() if p.name != "newton.py"
              for s in shared if s in p.read_text(encoding="utf-8")]
     assert not found, "\n".join(found)
     for user in ("jones", "shaft"):
-        assert ("bearingsim.newton" in {t for _, t, _ in imports(PACKAGE / f"{user}.py", f"bearingsim.{user}")})
+        assert ("bearingsim.physics.newton" in {t for _, t, _ in imports(PACKAGE / "physics" / f"{user}.py",
+                                                                         f"bearingsim.physics.{user}")})

@@ -1,10 +1,10 @@
 """Every bad input answered in one voice: through the command line entry point
-``bearingsim.cli.main``, exit code 2, one message naming the file and the key (or what is wrong
+``bearingsim.app.cli.main``, exit code 2, one message naming the file and the key (or what is wrong
 with the file), no traceback, and no output file left behind."""
 
 import pytest
 
-from bearingsim.cli import main
+from bearingsim.app.cli import main
 
 GOOD = """\
 title = "catalogue case"

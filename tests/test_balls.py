@@ -1,12 +1,12 @@
-"""The per-ball kernel (bearingsim.balls, MODEL.md sections 3-5) against independent forms."""
+"""The per-ball kernel (bearingsim.physics.balls, MODEL.md sections 3-5) against independent forms."""
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import balls
-from bearingsim.hertz import stiffness_curve
+from bearingsim.physics import balls
+from bearingsim.physics.hertz import stiffness_curve
 from conftest import DEG
 
 OP = bs.Operation.from_rpm(10000.0)

@@ -718,7 +718,7 @@ def test_cwru_case():
     np.testing.assert_allclose(float(s.length(b)), 0.021 * 25.4e-3, rtol=1e-12)
     # calibrated (docs/calibrate_cwru.py, docs/realism.md): the depth is the effective depth of
     # the 0.011 in deep EDM pit under the contact, written to 4 significant digits
-    from bearingsim.realism import pit_effective_depth
+    from bearingsim.realism.rig_record import pit_effective_depth
     pit = pit_effective_depth(b, c.operation(), c.loads(), 0.021 * 25.4e-3, 0.011 * 25.4e-3)
     np.testing.assert_allclose(float(s.depth), pit.depth, rtol=1e-3)
     assert c.get("operation.speed_rpm") == 1797.0
@@ -867,7 +867,7 @@ def test_bad_set_inputs_name_the_key(set_text, message):
 
 
 def test_set_cases_build_their_sets():
-    from bearingsim import shaft
+    from bearingsim.physics import shaft
     c = load_case(CASES_DIR / "harris218_db_heavy.toml")
     s = c.bearing_set()
     np.testing.assert_array_equal(np.asarray(s.facings), [1.0, -1.0])

@@ -8,9 +8,9 @@ import pytest
 
 from bearingsim import dynamics as dyn
 from bearingsim.case import load_case
-from bearingsim.defect import LOCATIONS, Spall
-from bearingsim.hertz import stiffness_curve
-from bearingsim.kinematics import Operation
+from bearingsim.physics.defect import LOCATIONS, Spall
+from bearingsim.physics.hertz import stiffness_curve
+from bearingsim.physics.kinematics import Operation
 
 T = 512
 FS = 48000.0
@@ -135,11 +135,11 @@ def test_menu():
 
 def test_pit_depths_inside_the_program(setup, program_run):
     """depth_rule "pit": the program's effective depth and unbridged fraction of each fault
-    item equal bearingsim.pit's NumPy functions on its healthy state with ball 0 at the pit
+    item equal bearingsim.physics.pit's NumPy functions on its healthy state with ball 0 at the pit
     (outer) or at azimuth 0 (inner, ball), solved on the host (1e-7: the Simpson weights, see
     tests/test_pit_device.py); healthy items get 0."""
-    from bearingsim.jones import solve
-    from bearingsim.pit import pit_depth_of_solution, pit_unbridged_fraction
+    from bearingsim.physics.jones import solve
+    from bearingsim.physics.pit import pit_depth_of_solution, pit_unbridged_fraction
 
     s = setup
     prog, args, _ = program_run

@@ -10,9 +10,10 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim import cli, io, workflows
+from bearingsim.app import cli, workflows
+from bearingsim.output import io
 from bearingsim.case import load_case
-from bearingsim.dataset import DatasetResult, DatasetSummary
+from bearingsim.datasets import DatasetResult, DatasetSummary
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ROOT / "tests" / "data" / "small_sweep.toml"

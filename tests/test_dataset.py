@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
-from bearingsim.cli import main
-from bearingsim.dataset import LABEL_FIELDS, draw_labels, make_dataset
+from bearingsim.app.cli import main
+from bearingsim.datasets import LABEL_FIELDS, draw_labels, make_dataset
 from bearingsim.errors import NotConvergedError
-from bearingsim.workflows import dataset_case, envelope_band
-from bearingsim.signal import envelope_spectrum, peak_frequency
+from bearingsim.app.workflows import dataset_case, envelope_band
+from bearingsim.signals.envelope import envelope_spectrum, peak_frequency
 
 ROOT = Path(__file__).resolve().parent.parent
 CWRU = (ROOT / "tests" / "data" / "cwru_like_6205.toml").read_text()      # fixed, not calibrated
@@ -158,7 +158,7 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
     """A failed item (result != 0) or a non-finite signal is written as zeros with result != 0."""
     import jax.numpy as jnp
 
-    import bearingsim.dataset as dsm
+    import bearingsim.datasets as dsm
     import bearingsim.dynamics as dyn
 
     class FakeProgram:
@@ -199,7 +199,7 @@ def _interrupting(monkeypatch, at_call, how):
     import os
     import signal
 
-    import bearingsim.dataset as dsm
+    import bearingsim.datasets as dsm
 
     monkeypatch.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
     real = dsm.program.device_program
@@ -221,7 +221,7 @@ def _interrupting(monkeypatch, at_call, how):
 def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, how):
     """An interrupted run keeps its finished chunk, leaves no temporary file, says so in one
     line; running again continues and gives a file bit-identical to an uninterrupted run."""
-    from bearingsim.dataset import Interrupted, partial_path
+    from bearingsim.datasets import Interrupted, partial_path
 
     case, a, _, _, _ = files
     out = tmp_path / "r.h5"
@@ -245,7 +245,7 @@ def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, 
 
 
 def test_partial_folder_of_another_spec_is_refused(files, tmp_path):
-    from bearingsim.dataset import partial_path
+    from bearingsim.datasets import partial_path
     from bearingsim.errors import InputError
 
     case, _, _, _, _ = files
@@ -291,9 +291,9 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
     machined rule keeps the drawn depth."""
     import h5py
 
-    from bearingsim import realism as rl
-    from bearingsim.dataset import pit_depths, slots_of, draw_labels
-    from bearingsim.workflows import dataset_case
+    from bearingsim.realism import rig_record as rl
+    from bearingsim.datasets import pit_depths, slots_of, draw_labels
+    from bearingsim.app.workflows import dataset_case
 
     spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
     for k, v in {"dataset.count": 2, "dataset.chunk": 2, "dataset.healthy_fraction": 0.0,
@@ -368,8 +368,8 @@ def test_dataset_items_carry_the_pass_to_pass_variability_of_a_single_run(tmp_pa
     the calibrated maxima x the unbridged fraction.  (The variability's own random numbers come
     from the signal stage's streams, bearingsim.keys.STREAMS, not NumPy's: data set version 5.)"""
     from bearingsim import dynamics as dyn
-    from bearingsim.dataset import chunk_keys
-    from bearingsim.defect import Spall
+    from bearingsim.datasets import chunk_keys
+    from bearingsim.physics.defect import Spall
 
     spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
     for k, v in {"dataset.count": 2, "dataset.chunk": 2, "dataset.healthy_fraction": 0.0,
@@ -416,7 +416,7 @@ split_fractions = [0.5, 0.25, 0.25]
 
 
 def test_randomised_labels_are_drawn_apart_from_the_old_ones():
-    from bearingsim.dataset import transfer_paths
+    from bearingsim.datasets import transfer_paths
     base, rnd = draw_labels(spec()), draw_labels(spec(extra=RANDOMISED))
     same = [k for k in LABEL_FIELDS if k not in ("spall_center_deg", "signal_gain", "split")]
     for k in same:                       # the draws every spec made before stay what they were
@@ -456,8 +456,8 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
     # each item's background: the signal stage's draw from its key's "background" stream
     import jax
 
-    from bearingsim import signal_stage as ss
-    from bearingsim.dataset import Physics, chunk_keys, signal_settings
+    from bearingsim.signals import signal_stage as ss
+    from bearingsim.datasets import Physics, chunk_keys, signal_settings
     bcase = spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\nbackground_rms_m_s2 = [0.5, 0.5]\n')
     st = signal_settings(bcase, bcase.data["dataset"], fs, x3.shape[1], Physics.of_case(bcase))
     keys = chunk_keys(lab["key"])
@@ -469,11 +469,11 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
         assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
 
 
-# ----------------------------------------------------------------- the ML reader (bearingsim.mldata)
+# ----------------------------------------------------------------- the ML reader (bearingsim.datasets.mldata)
 def test_load_dataset_reads_arrays_labels_and_metadata(files, tmp_path):
     import bearingsim
-    from bearingsim.dataset import CLASSES, SPLITS
-    from bearingsim.mldata import SPLITS as READER_SPLITS
+    from bearingsim.datasets import CLASSES, SPLITS
+    from bearingsim.datasets.mldata import SPLITS as READER_SPLITS
 
     _, a, _, _, _ = files
     X, L, meta = bearingsim.load_dataset(a)
@@ -522,7 +522,7 @@ def test_load_dataset_leaves_failed_items_out(files, tmp_path):
 
 def test_window_dataset_windows_items_of_one_split(files):
     from bearingsim import WindowDataset, load_dataset
-    from bearingsim.features import FEATURE_NAMES
+    from bearingsim.signals.features import FEATURE_NAMES
 
     _, a, _, _, _ = files
     X, L, _ = load_dataset(a)
@@ -547,7 +547,7 @@ def test_window_dataset_windows_items_of_one_split(files):
     v, y = f[2]
     assert v.shape == (len(FEATURE_NAMES),) and v.dtype == np.float32 and np.all(np.isfinite(v))
     from bearingsim.case import parse_case
-    from bearingsim.features import fault_orders, window_features
+    from bearingsim.signals.features import fault_orders, window_features
 
     _, _, meta = load_dataset(a)
     ref = window_features(X[2:3].astype(float), 24000.0, L["shaft_Hz"][2],
@@ -559,7 +559,7 @@ def test_window_dataset_windows_items_of_one_split(files):
 
 
 def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
-    from bearingsim import workflows
+    from bearingsim.app import workflows
 
     seen = []
 

@@ -7,8 +7,8 @@ import h5py
 import numpy as np
 import pytest
 
-import bearingsim.dataset as dsm
-from bearingsim.dataset import draw_labels, item_keys, make_dataset
+import bearingsim.datasets as dsm
+from bearingsim.datasets import draw_labels, item_keys, make_dataset
 from bearingsim.errors import InputError
 
 sys.path.insert(0, str(Path(__file__).parent))

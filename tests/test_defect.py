@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import jones
-from bearingsim.defect import depth_profile, wrap_angle
+from bearingsim.physics import jones
+from bearingsim.physics.defect import depth_profile, wrap_angle
 from bearingsim.xla import compiler_options
 from conftest import ball_equilibrium_error, equilibrium_error
 
@@ -135,9 +135,9 @@ def test_seed_findings_jump_grows_with_extent(b218):
 
 
 # ------------------------------------------------------------------------------ inner raceway, ball (MODEL.md 9)
-from bearingsim.balls import ball_state, balls_at  # noqa: E402
-from bearingsim.defect import ball_pit_depths, contact_depths  # noqa: E402
-from bearingsim.hertz import stiffness_curve  # noqa: E402
+from bearingsim.physics.balls import ball_state, balls_at  # noqa: E402
+from bearingsim.physics.defect import ball_pit_depths, contact_depths  # noqa: E402
+from bearingsim.physics.hertz import stiffness_curve  # noqa: E402
 from conftest import inverted_contacts  # noqa: E402
 
 INNER = bs.Spall(0.0, 8 * DEG, 0.3e-3, "rectangular", "inner")     # under ball 0, the most loaded
@@ -241,7 +241,7 @@ def test_inner_spall_under_the_most_loaded_ball(b218, rpm):
         # carried by the cage at its undropped orbital speed: F_c alone holds it on the outer raceway
         assert float(s.Q_outer[0]) == pytest.approx(float(s.centrifugal[0]), rel=1e-6)
         # ... at the orbital speed of its undropped centre (same q, no defect), MODEL.md 5
-        from bearingsim.balls import groove_centre_offsets
+        from bearingsim.physics.balls import groove_centre_offsets
         A1, A2 = groove_centre_offsets(b218, s.displacement, s.azimuth)
         wu = ball_state(b218, op, s.undropped_position[0], A1[0], A2[0], stiffness_curve(b218)).orbital_speed
         assert float(s.orbital_speed[0]) == pytest.approx(float(wu), rel=1e-12)
@@ -284,7 +284,7 @@ def test_ball_pit_at_rest_closed_form(b218):
         assert tot_s[3] == pytest.approx(tot_h[3] - Hb, abs=1e-15)      # round-off of ~1e-4 m lengths
         np.testing.assert_array_equal(np.delete(tot_s, 3), np.delete(tot_h, 3))
         # same ball centre: the pit takes exactly H_b off the contact it is in
-        from bearingsim.balls import groove_centre_offsets
+        from bearingsim.physics.balls import groove_centre_offsets
         A1, A2 = groove_centre_offsets(b218, q, psi)
         x = jnp.stack([h.X1[3], h.X2[3]])
         st = ball_state(b218, op, x, A1[3], A2[3], curve, Ho[3], Hi[3])
@@ -309,7 +309,7 @@ def test_sweep_of_the_inner_spall_azimuth(b218):
     """The inner spall turned past the loaded balls at a fixed cage angle: every state converged
     and valid, equal to the single solve at the same azimuth, and ball 0 drops exactly while the
     spall is under it."""
-    from bearingsim.sweep import sweep_defect_angle
+    from bearingsim.physics.sweep import sweep_defect_angle
     op = bs.Operation.from_rpm(0.0)
     centres = np.array([-8.0, -5.0, -2.0, 0.0, 3.0, 11.25, 20.0]) * DEG
     s = sweep_defect_angle(b218, op, LOADS, INNER, centres)
@@ -324,7 +324,7 @@ def test_sweep_of_the_inner_spall_azimuth(b218):
 def test_advance_in_time(b218):
     """psi_di = phi_d + omega t for the inner spall, theta_b = theta_b0 + omega_R t for the pit;
     the outer spall stays put."""
-    from bearingsim.defect import advance
+    from bearingsim.physics.defect import advance
     w, wR, t = 100.0, 250.0, 0.013
     o, i, p = (bs.Spall(0.1, 0.05, 1e-4, "ball-path", loc, 2) for loc in ("outer", "inner", "ball"))
     ao, ai, ap = advance((o, i, p), t, w, wR)

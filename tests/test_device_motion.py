@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from bearingsim import dynamics as dyn
-from bearingsim import sensor
-from bearingsim.defect import Spall
-from bearingsim.geometry import Bearing
+from bearingsim.signals import sensor
+from bearingsim.physics.defect import Spall
+from bearingsim.physics.geometry import Bearing
 
 Z = 9
 FS = 48000.0

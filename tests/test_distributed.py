@@ -1,4 +1,4 @@
-"""Data sets on a Dask cluster (bearingsim.distributed): the same bytes as the in-process run on a
+"""Data sets on a Dask cluster (bearingsim.datasets.distributed): the same bytes as the in-process run on a
 LocalCluster of 2 workers, a worker killed mid-chunk is retried, an interrupted distributed run
 resumes without a cluster, the in-process run never imports Dask, a missing Dask or an
 unreachable scheduler is one message and an exit code."""
@@ -10,8 +10,8 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim.cli import main
-from bearingsim.dataset import Interrupted, make_dataset, partial_path, simulate_chunk
+from bearingsim.app.cli import main
+from bearingsim.datasets import Interrupted, make_dataset, partial_path, simulate_chunk
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_dataset import spec as _spec  # noqa: E402
@@ -29,7 +29,7 @@ distributed = pytest.importorskip("distributed")
 def width3():
     """The CPU micro-batch width set to 3 in this (client) process, so that the 6 items make two
     chunks of one micro-batch each (the width travels to the workers in the plan)."""
-    import bearingsim.dataset as dsm
+    import bearingsim.datasets as dsm
     mp = pytest.MonkeyPatch()
     mp.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
     yield
@@ -56,7 +56,7 @@ def serial(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def runner():
-    from bearingsim.distributed import DaskRunner
+    from bearingsim.datasets.distributed import DaskRunner
 
     with DaskRunner(workers=2) as r:
         yield r
@@ -134,7 +134,7 @@ def test_cli_without_dask_says_how_to_install(monkeypatch, tmp_path, capsys):
 
 
 def test_unreachable_scheduler_is_one_message(tmp_path, capsys):
-    from bearingsim.distributed import DaskRunner
+    from bearingsim.datasets.distributed import DaskRunner
     from bearingsim.errors import ClusterError
 
     with pytest.raises(ClusterError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9") as e:
@@ -154,7 +154,7 @@ def test_study_on_the_cluster_equals_the_in_process_study(runner):
     same numbers as in this process."""
     import jax
 
-    from bearingsim.workflows import study_case
+    from bearingsim.app.workflows import study_case
     from test_workflows import study
 
     case = study("defect.depth_mm", [0.0, 0.3])

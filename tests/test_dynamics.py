@@ -8,10 +8,10 @@ import scipy.signal as ss
 
 import bearingsim as bs
 from bearingsim import dynamics as dyn
-from bearingsim import sensor
+from bearingsim.signals import sensor
 from bearingsim.case import load_case, parse_case
-from bearingsim.signal import envelope_spectrum, peak_frequency, squared_envelope
-from bearingsim.sweep import sweep
+from bearingsim.signals.envelope import envelope_spectrum, peak_frequency, squared_envelope
+from bearingsim.physics.sweep import sweep
 from bearingsim.xla import jit
 
 CASES = Path(__file__).resolve().parent.parent / "cases"

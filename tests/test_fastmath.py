@@ -7,8 +7,8 @@ import pytest
 from jax.extend.core import Literal
 
 from bearingsim import fastmath as fm
-from bearingsim.balls import ball_equations
-from bearingsim.kinematics import Operation
+from bearingsim.physics.balls import ball_equations
+from bearingsim.physics.kinematics import Operation
 
 RNG = np.random.default_rng(7)
 X = jnp.asarray(RNG.uniform(0.1, 30.0, 64))
@@ -78,7 +78,7 @@ def test_ball_equations_derivatives_add_no_divisions(b218):
     ball's speed ratio, 2 square roots (the distances) + 2 (delta**1.5), 1 reciprocal square
     root (the pitch angle), each traced once per derivative direction (XLA merges the copies);
     before fastmath the same jaxpr held 33 per-ball divisions per direction."""
-    from bearingsim.hertz import stiffness_curve
+    from bearingsim.physics.hertz import stiffness_curve
 
     op = Operation(1000.0)
     curve = stiffness_curve(b218)

@@ -7,7 +7,7 @@ Cost: one simulation per record, module-scoped and shared (CWRU 6205 cases, real
 
 Envelope analysis as the rig comparison (tests/test_realdata.py): band 2.5-5.5 kHz (it holds the
 two sensor modes of the CWRU cases, 2978 and 3356 Hz), squared envelope, Hann window, spectrum
-zero-padded x2 (bearingsim.signal.envelope_spectrum).  0.5 s gives a native resolution of 2 Hz;
+zero-padded x2 (bearingsim.signals.envelope.envelope_spectrum).  0.5 s gives a native resolution of 2 Hz;
 the shaft (29.95 Hz) and cage (11.96 Hz) sidebands are 15 and 6 resolution cells from the line.
 """
 from pathlib import Path
@@ -20,13 +20,13 @@ import pytest
 import bearingsim as bs
 from bearingsim.case import load_case
 from bearingsim.dynamics import DynamicsParameters, Realism, characteristic_frequencies, simulate
-from bearingsim.signal import envelope_spectrum, peak_frequency
+from bearingsim.signals.envelope import envelope_spectrum, peak_frequency
 
 REPO = Path(__file__).resolve().parents[1]
 DURATION, FS = 0.5, 12000.0
 BAND = (2500.0, 5500.0)
 # A line "stands above the floor" when it is >= 10 dB over the median of the spectrum over
-# 0.5-1.5 x the fault frequency (the local median of bearingsim.signal.record_metrics).  With
+# 0.5-1.5 x the fault frequency (the local median of bearingsim.signals.envelope.record_metrics).  With
 # realism off the floor is only leakage and the impacts' own broadband content; the measured
 # sidebands stand 25-28 dB over it (inner +-f_r) and 25-26 dB (ball +-FTF), so 10 dB separates
 # "a line" from "no line" with a wide margin while not depending on the exact level.
@@ -133,7 +133,7 @@ def test_depth_zero_is_the_healthy_bearing(records, loc):
 # ------------------------------------------------------------------------------ data set
 @pytest.fixture(scope="module")
 def four_class_dataset(tmp_path_factory):
-    from bearingsim.workflows import dataset_case
+    from bearingsim.app.workflows import dataset_case
 
     spec = load_case(REPO / "cases" / "dataset_cwru.toml")
     # outer_fraction defaults to the rest: set inner and ball before healthy so every
@@ -164,8 +164,8 @@ def test_four_class_dataset_labels(four_class_dataset):
     assert np.all(lab["spall_depth_mm"][~h] > 0) and np.all(lab["spall_length_mm"][~h] > 0)
     np.testing.assert_allclose(lab["shaft_Hz"], lab["speed_rpm"] / 60.0, rtol=1e-12)
 
-    from bearingsim.jones import load_vector
-    from bearingsim.kinematics import Operation
+    from bearingsim.physics.jones import load_vector
+    from bearingsim.physics.kinematics import Operation
 
     b = spec.bearing()
     control = spec.data["operation"]["raceway_control"]

@@ -4,9 +4,9 @@ bounds)."""
 import numpy as np
 import pytest
 
-from bearingsim.background import Background, background_signal, random_background, shaped_noise
-from bearingsim.features import FEATURE_NAMES, FaultOrders, cut_windows, fault_orders, octave_bands, window_features
-from bearingsim.passes import pass_variation, strike_mask
+from bearingsim.signals.background import Background, background_signal, random_background, shaped_noise
+from bearingsim.signals.features import FEATURE_NAMES, FaultOrders, cut_windows, fault_orders, octave_bands, window_features
+from bearingsim.signals.passes import pass_variation, strike_mask
 
 FS = 12000.0
 FR = 29.95
@@ -127,7 +127,7 @@ def test_strike_mask_and_intermittent_passes():
 def test_supply_frequency_modulation_shows_in_the_envelope():
     """Broadband noise modulated at twice the supply frequency (an induction motor): its squared
     envelope has the line at 120 Hz (2 x 60 Hz) and none at 60 Hz, as the modulation's spectrum."""
-    from bearingsim.signal import envelope_spectrum
+    from bearingsim.signals.envelope import envelope_spectrum
     bg = Background(noise_rms=1.0, line_frequency=60.0, line_modulation_depths=(0.0, 0.5))
     x = background_signal(np.random.default_rng(3), 48000, FS, 29.95, bg)
     sp = envelope_spectrum(x, FS, band=(1000.0, 5000.0))

@@ -7,7 +7,7 @@ import pytest
 import scipy.special as sp
 
 import bearingsim as bs
-from bearingsim import hertz
+from bearingsim.physics import hertz
 
 def test_elliptic_integrals_match_scipy_to_1e12():
     m = np.concatenate([[0.0, 1e-10, 1e-6], np.linspace(0.01, 0.99, 50), 1 - np.logspace(-3, -9, 7)])

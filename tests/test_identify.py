@@ -9,11 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from bearingsim import cli
+from bearingsim.app import cli
 from bearingsim.case import load_case
-from bearingsim.fault_size import (angle_from_order, line_frequency, order_of_angle, pass_times,
+from bearingsim.realism.fault_size import (angle_from_order, line_frequency, order_of_angle, pass_times,
                                    surface_speed)
-from bearingsim.features import fault_orders
+from bearingsim.signals.features import fault_orders
 
 SPEC = "dataset_cwru_4class"
 
@@ -95,7 +95,7 @@ def test_line_frequency_finds_a_known_impulse_rate_within_its_uncertainty():
 
 
 def test_clipping_is_detected_and_noise_is_not():
-    from bearingsim.identify import CLIP_SAMPLES, clipped_fraction
+    from bearingsim.realism.identify import CLIP_SAMPLES, clipped_fraction
 
     x = _impulse_train(12000.0, 100.0, 2.0, noise=0.05, seed=1)
     assert clipped_fraction(x) * x.size < CLIP_SAMPLES
@@ -140,7 +140,7 @@ def test_missing_file_exit_2_and_directory_output_exit_4(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def bank(tmp_path_factory):
     pytest.importorskip("sklearn")
-    from bearingsim.identify import build_bank
+    from bearingsim.realism.identify import build_bank
 
     d = tmp_path_factory.mktemp("bank")
     return build_bank(d / "bank.h5", count=160, seed=7101, progress=False)
@@ -148,7 +148,7 @@ def bank(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def identifier(bank):
-    from bearingsim.identify import bank_features, train_identifier
+    from bearingsim.realism.identify import bank_features, train_identifier
 
     return train_identifier(bank_features(bank), bank)
 
@@ -158,8 +158,8 @@ def fresh(tmp_path_factory, bank):
     """16 records of a seed the bank never used (0.2 s at 12 kHz, as the bank's items)."""
     import h5py
 
-    from bearingsim.dataset import make_dataset
-    from bearingsim.identify import bank_spec
+    from bearingsim.datasets import make_dataset
+    from bearingsim.realism.identify import bank_spec
 
     p = tmp_path_factory.mktemp("fresh") / "fresh.h5"
     make_dataset(bank_spec(16, 9101), p, progress=False)
@@ -168,7 +168,7 @@ def fresh(tmp_path_factory, bank):
 
 
 def test_round_trip_on_fresh_simulated_records(identifier, fresh):
-    from bearingsim.identify import BANK_WINDOW_S, CLASSES, identify
+    from bearingsim.realism.identify import BANK_WINDOW_S, CLASSES, identify
 
     X, lab = fresh
     right, inside, sized = 0, 0, 0
@@ -189,7 +189,7 @@ def test_round_trip_on_fresh_simulated_records(identifier, fresh):
 
 
 def test_noise_only_record_is_healthy_or_not_identifiable(identifier, tmp_path):
-    from bearingsim.identify import identify
+    from bearingsim.realism.identify import identify
 
     x = np.random.default_rng(3).standard_normal(24000)
     r = identify(x, 12000.0, SPEC, rpm=1797.0, identifier=identifier)
@@ -197,7 +197,7 @@ def test_noise_only_record_is_healthy_or_not_identifiable(identifier, tmp_path):
 
 
 def test_clipped_record_gets_no_size(identifier, fresh):
-    from bearingsim.identify import identify
+    from bearingsim.realism.identify import identify
 
     X, lab = fresh
     i = int(np.flatnonzero(lab["fault_class"] == 1)[0])

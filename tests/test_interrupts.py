@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from bearingsim.cli import main
+from bearingsim.app.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_dataset import spec  # noqa: E402

@@ -1,4 +1,4 @@
-"""bearingsim.io: the fixed JSON and HDF5 layouts, units on every dataset, atomic writes, no NaN."""
+"""bearingsim.output.io: the fixed JSON and HDF5 layouts, units on every dataset, atomic writes, no NaN."""
 import dataclasses
 import json
 from pathlib import Path
@@ -8,7 +8,8 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim import io, workflows
+from bearingsim.output import io
+from bearingsim.app import workflows
 from bearingsim.case import load_case, parse_case
 from bearingsim.errors import OutputError
 

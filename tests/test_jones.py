@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import bearingsim as bs
-from bearingsim import jones
+from bearingsim.physics import jones
 from bearingsim.xla import compiler_options
 from conftest import DEG, ball_equilibrium_error, beyond_high_shoulder, beyond_low_shoulder, equilibrium_error, inverted_contacts
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import limits
+from bearingsim.physics import limits
 
 DEG = np.pi / 180
 

@@ -1,5 +1,5 @@
-"""bearingsim calibrate (bearingsim.machine): the fit recovers a synthetic machine whose background
-is known (the independent truth: bearingsim.background.background_signal with chosen
+"""bearingsim calibrate (bearingsim.realism.machine): the fit recovers a synthetic machine whose background
+is known (the independent truth: bearingsim.signals.background.background_signal with chosen
 parameters), the written spec loads and runs as a data set, the signal gain of a fault record
 whose level is known, and the real CWRU normal record when ../shared/realdata is present."""
 from pathlib import Path
@@ -8,13 +8,13 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim.background import Background, background_signal
+from bearingsim.signals.background import Background, background_signal
 from bearingsim.case import case_from_dict, load_case, parse_case
-from bearingsim.cli import main
-from bearingsim.dataset import make_dataset
-from bearingsim.machine import calibrate_machine
-from bearingsim.records import read_record
-from bearingsim.workflows import calibrate_case
+from bearingsim.app.cli import main
+from bearingsim.datasets import make_dataset
+from bearingsim.realism.machine import calibrate_machine
+from bearingsim.realism.records import read_record
+from bearingsim.app.workflows import calibrate_case
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / ".." / "shared" / "realdata"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bearingsim  # noqa: F401  (float64)
-from bearingsim import nuisance as nu
+from bearingsim.signals import nuisance as nu
 
 FS = 12000.0
 T = 2400                      # 0.2 s

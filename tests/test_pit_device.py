@@ -1,4 +1,4 @@
-"""The pit physics in JAX (for a data set chunk's device program) equals bearingsim.pit's NumPy
+"""The pit physics in JAX (for a data set chunk's device program) equals bearingsim.physics.pit's NumPy
 functions on the same healthy quasi-static states: the same formulas on the same 2001 points;
 scipy's Simpson weights come from the points' actual spacing, the JAX rule's from the uniform
 one, which differ by ~2e-9 relative (the quadrature's own error at 2001 points, against
@@ -8,10 +8,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim import pit
+from bearingsim.physics import pit
 from bearingsim.case import load_case
-from bearingsim.jones import load_vector, solve
-from bearingsim.kinematics import Operation
+from bearingsim.physics.jones import load_vector, solve
+from bearingsim.physics.kinematics import Operation
 
 
 @pytest.mark.parametrize("a,b,w,e", [(1e-3, 1e-4, 5e-4, 0.0), (1e-3, 1e-4, 5e-4, 3e-4), (1e-3, 2e-4, 1e-5, 1e-4),

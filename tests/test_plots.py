@@ -1,4 +1,4 @@
-"""bearingsim.plots: report figures of quasi-static states, studies, simulations and comparisons
+"""bearingsim.output.plots: report figures of quasi-static states, studies, simulations and comparisons
 (labelled axes with units, saved when given a path)."""
 from pathlib import Path
 from types import SimpleNamespace
@@ -13,7 +13,8 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 
-from bearingsim import plots, workflows  # noqa: E402
+from bearingsim.output import plots
+from bearingsim.app import workflows  # noqa: E402
 from bearingsim.case import parse_case  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

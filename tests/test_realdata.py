@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bearingsim.signal import record_metrics
+from bearingsim.signals.envelope import record_metrics
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO / ".." / "shared" / "realdata"
@@ -95,7 +95,7 @@ KNOWN_MISSES = {(0.007, 48000, "rms"): "135 is 1.9x as strong as 130 (the 12 kHz
 
 @pytest.fixture(scope="module")
 def real_segments():
-    from bearingsim import calibration as cal
+    from bearingsim.realism import calibration as cal
 
     out = {}
     for size in SIM_CASES:
@@ -107,7 +107,7 @@ def real_segments():
 
 @pytest.fixture(scope="module")
 def simulated():
-    from bearingsim import calibration as cal, realism as rl
+    from bearingsim.realism import calibration as cal, rig_record as rl
     from bearingsim.case import load_case
 
     out = {}
@@ -123,7 +123,7 @@ def simulated():
 
 
 def _cases():
-    from bearingsim.calibration import TARGETS
+    from bearingsim.realism.calibration import TARGETS
 
     for size in SIM_CASES:
         for fs in (12000, 48000):
@@ -136,7 +136,7 @@ def _cases():
 
 @pytest.mark.parametrize("size, fs, target", list(_cases()))
 def test_simulated_record_within_issue9_target(simulated, real_segments, size, fs, target):
-    """Issue 9 targets (bearingsim.calibration.TARGETS): BPFO order within 0.3 %, peak over
+    """Issue 9 targets (bearingsim.realism.calibration.TARGETS): BPFO order within 0.3 %, peak over
     median within +-8 dB, A2/A1 and A3/A1 within +-0.15, kurtosis and RMS within a factor 2;
     real = median over the record's 1-s segments.  The 12 kHz records (130, 234) were used by
     the calibration, the 48 kHz ones (135, 238) were not."""
@@ -166,7 +166,7 @@ SIDEBAND_DB = 12.0
 def _ses(x, fs, band=(2500.0, 5500.0)):
     """The squared-envelope spectrum of record_metrics (same band, window, padding, scale)."""
     import scipy.signal as ss
-    from bearingsim.signal import bandpass
+    from bearingsim.signals.envelope import bandpass
 
     e2 = np.abs(ss.hilbert(bandpass(x, fs, *band))) ** 2
     e2 -= e2.mean()
@@ -194,7 +194,7 @@ def sideband_db(x, fs, shaft_hz, order, side_order, k=(-1, 1), half_width=1.5):
 def fault_real():
     """(kind, fs) -> (median RecordMetrics over 1-s segments, per-segment metrics, median
     sideband dB [-f, +f] over the segments)."""
-    from bearingsim import calibration as cal
+    from bearingsim.realism import calibration as cal
 
     out = {}
     for (kind, fs), stem in FAULT_RECORDS.items():
@@ -212,7 +212,7 @@ def fault_real():
 @pytest.fixture(scope="module")
 def fault_simulated():
     """(kind, fs) -> (RecordMetrics, sideband dB [-f, +f], DynamicsResult) of one simulated 1-s record."""
-    from bearingsim import calibration as cal, realism as rl
+    from bearingsim.realism import calibration as cal, rig_record as rl
     from bearingsim.case import load_case
 
     out = {}

@@ -1,4 +1,4 @@
-"""bearingsim.realism against answers known without the code under test.
+"""bearingsim.realism.rig_record against answers known without the code under test.
 
 * Hertz pressure over a disc: the whole load when the disc covers the contact, 3 r^2 / (2 a b)
   of it for a small centred disc (p ~ p0 there, load (2/3) pi a b p0), nothing when the disc
@@ -16,7 +16,7 @@ import types
 import numpy as np
 import pytest
 
-from bearingsim import realism as rl
+from bearingsim.realism import rig_record as rl
 
 INCH = 25.4e-3
 
@@ -116,7 +116,7 @@ def test_decimate_record_anti_alias():
 
 def test_sensor_record_without_variability_is_the_sensor_path():
     from bearingsim.dynamics import DynamicsParameters
-    from bearingsim.sensor import apply_sensor
+    from bearingsim.signals.sensor import apply_sensor
 
     fs = 48000.0
     rng = np.random.default_rng(2)
@@ -225,7 +225,7 @@ def test_engine_pass_variability_acts_on_the_sensor_path_only(cwru_runs):
     housing acceleration varied pass by pass with the labelled draws (vary_passes), plus the
     same noise; the motion, the housing acceleration and the noise equal those of the run with
     the variability off (the slip/noise streams do not move), and the records differ."""
-    from bearingsim.sensor import apply_sensor
+    from bearingsim.signals.sensor import apply_sensor
 
     case, on, r, r0 = cwru_runs
     fs = 24000.0
@@ -250,7 +250,7 @@ def test_engine_pass_variability_off_for_a_bridged_pit(cwru_runs):
     """A pit shorter than the contact (w < 2b: unbridged fraction 0) is bridged every pass: with
     the maxima on, the record is the one without them (the engine's own sensor path)."""
     from bearingsim import dynamics as dyn
-    from bearingsim.defect import Spall
+    from bearingsim.physics.defect import Spall
 
     case, on, _, _ = cwru_runs
     b = case.bearing()
@@ -266,7 +266,7 @@ def test_engine_pass_variability_off_for_a_bridged_pit(cwru_runs):
 
 def test_engine_pass_variability_needs_one_defect(cwru_runs):
     from bearingsim import dynamics as dyn
-    from bearingsim.defect import Spall
+    from bearingsim.physics.defect import Spall
     from bearingsim.errors import InputError
 
     case, on, _, _ = cwru_runs

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from bearingsim.case import load_case
-from bearingsim.cli import main
+from bearingsim.app.cli import main
 from bearingsim.errors import InputError
-from bearingsim.record_spectrum import fault_line_table, record_spectrum
+from bearingsim.realism.record_spectrum import fault_line_table, record_spectrum
 
 REPO = Path(__file__).resolve().parents[1]
 OR007 = REPO / ".." / "shared" / "realdata" / "cwru_OR007_6_0hp_12k.npz"

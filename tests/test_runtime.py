@@ -68,7 +68,7 @@ def test_cache_dir_rules():
 
 
 def test_import_and_help_load_no_jax(tmp_path):
-    code = ("import sys, bearingsim; from bearingsim.cli import build_parser; "
+    code = ("import sys, bearingsim; from bearingsim.app.cli import build_parser; "
             "h = build_parser().format_help(); print('jax' in sys.modules, 'spectrum' in h, "
             "bearingsim.__version__ is not None)")
     assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["False", "True", "True"]
@@ -85,23 +85,23 @@ NOUNS = ("solve", "solve_batch", "solve_set", "sweep", "simulate", "load_case", 
 def test_every_exported_noun_resolves_lazily(tmp_path):
     """Each name of ``bearingsim.__all__`` resolves at first use, after an import that loaded no
     JAX, and the nouns a user types are bearingsim's objects of that name (the function or class,
-    or for ``sweep`` and ``identify`` the module that calls it: Python rebinds ``bearingsim.sweep``
+    or for ``sweep`` and ``identify`` the module that calls it: Python rebinds ``bearingsim.physics.sweep``
     to the submodule whenever it is imported, so the submodule-first order is checked too)."""
     code = ("import sys, bearingsim; before = 'jax' in sys.modules; "
             "missing = [n for n in bearingsim.__all__ if getattr(bearingsim, n, None) is None]; "
-            "import bearingsim.sweep as sw, bearingsim.identify as idm; "
-            "print(before, missing, sw is bearingsim.sweep, callable(bearingsim.sweep), "
-            "callable(bearingsim.identify), set(bearingsim.__all__) <= set(dir(bearingsim)))")
+            "import bearingsim.physics.sweep as sw, bearingsim.realism.identify as idm; "
+            "print(before, missing, sw is bearingsim.physics.sweep, callable(bearingsim.physics.sweep), "
+            "callable(bearingsim.realism.identify), set(bearingsim.__all__) <= set(dir(bearingsim)))")
     assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["False", "[]"] + ["True"] * 4
-    code = "import bearingsim.sweep, bearingsim; print(callable(bearingsim.sweep), bearingsim.sweep.sweep.__module__)"
-    assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["True", "bearingsim.sweep"]
+    code = "import bearingsim.physics.sweep, bearingsim; print(callable(bearingsim.physics.sweep), bearingsim.physics.sweep.sweep.__module__)"
+    assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["True", "bearingsim.physics.sweep"]
     code = ("import bearingsim; print(*[(o.__name__.split('.')[-1], o.__module__.split('.')[0]) == (n, 'bearingsim') "
             f"for n, o in ((n, getattr(bearingsim, n)) for n in {NOUNS!r})])")
     assert run({"BEARINGSIM_CACHE_DIR": "off"}, tmp_path, code) == ["True"] * len(NOUNS)
 
 
 def test_cold_cache_is_said_and_counted(tmp_path, monkeypatch):
-    from bearingsim import budget
+    from bearingsim.datasets import budget
     from bearingsim.case import load_case
 
     monkeypatch.setattr(runtime, "configured_cache_dir", lambda: tmp_path)
@@ -122,7 +122,7 @@ def test_cold_cache_is_said_and_counted(tmp_path, monkeypatch):
 
 
 def test_cache_command_says_where_and_clears(tmp_path):
-    code = ("from bearingsim.cli import main; import jax, jax.numpy as jnp; jax.jit(lambda x: x + 2.0)(jnp.ones(2)); "
+    code = ("from bearingsim.app.cli import main; import jax, jax.numpy as jnp; jax.jit(lambda x: x + 2.0)(jnp.ones(2)); "
             "main(['cache']); main(['cache', '--clear'])")
     d = tmp_path / "c"
     out = " ".join(run({"BEARINGSIM_CACHE_DIR": str(d)}, tmp_path, code))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bearingsim.case import load_case
-from bearingsim.sets import plot_set_limits, study_limits, study_set_case
+from bearingsim.app.sets import plot_set_limits, study_limits, study_set_case
 
 
 def test_limits_over_speed_of_a_db_pair(tmp_path):
@@ -36,9 +36,9 @@ def test_set_study_writes_every_output_per_bearing_and_value(tmp_path, capsys):
 
     import h5py
 
-    from bearingsim.cli import main
-    from bearingsim.sets import SET_FIELDS, STUDY_FIELDS
-    from bearingsim.shaft import static_axial_capacity
+    from bearingsim.app.cli import main
+    from bearingsim.app.sets import SET_FIELDS, STUDY_FIELDS
+    from bearingsim.physics.shaft import static_axial_capacity
 
     out, plots = tmp_path / "s.h5", tmp_path / "plots"
     assert main(["study", "harris218_db_light", "-o", str(out), "--plot", str(plots)]) == 0
@@ -78,7 +78,7 @@ def test_set_study_writes_every_output_per_bearing_and_value(tmp_path, capsys):
 
 
 def test_preload_class_says_what_it_is(capsys):
-    from bearingsim.cli import main
+    from bearingsim.app.cli import main
 
     assert main(["info", "harris218_db_medium"]) == 0
     out = capsys.readouterr().out

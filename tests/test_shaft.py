@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import shaft
+from bearingsim.physics import shaft
 from bearingsim.errors import InputError
-from bearingsim.jones import solve_batch
+from bearingsim.physics.jones import solve_batch
 from conftest import beyond_high_shoulder
 
 D218 = dict(n_balls=16, ball_diameter=22.225e-3, pitch_diameter=125.26e-3, f_inner=0.5232,
@@ -223,7 +223,7 @@ def test_defect_in_one_bearing_swept_over_the_cage_angle(b218):
     carries less of the radial load and bearing 2 (healthy) takes it up; the shaft's equilibrium
     holds at every angle, and the healthy set is recovered away from the spall.  The spall's
     centre is given in the shaft frame (psi = 0, the most loaded azimuth of both bearings)."""
-    from bearingsim.defect import Spall
+    from bearingsim.physics.defect import Spall
     bset = shaft.BearingSet([b218, b218], [0.0, SPACING], [1, -1], [P, P])
     spall = Spall(0.0, np.deg2rad(12.0), 0.3e-3, "ball-path")
     Z = b218.n_balls

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import geometry, jones
+from bearingsim.physics import geometry, jones
 
 DEG = np.pi / 180
 REST = bs.Operation.from_rpm(0.0)

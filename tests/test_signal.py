@@ -1,4 +1,4 @@
-"""Envelope analysis (bearingsim.signal) against signals whose answer is known by construction.
+"""Envelope analysis (bearingsim.signals.envelope) against signals whose answer is known by construction.
 
 Truths used here do not come from the code under test:
 * a synthetic outer-race fault: impacts at exactly f_d = 107.36 Hz (±1 % seeded jitter
@@ -13,7 +13,7 @@ Tolerances: defect lines 0.5 % of k*f_d; AM line amplitudes 1 %; tone frequency 
 import numpy as np
 import pytest
 
-from bearingsim import signal as bsig
+from bearingsim.signals import envelope as bsig
 
 FS = 48_000.0
 FD = 107.36          # impact rate (Hz) = "BPFO" of the synthetic fault
@@ -207,7 +207,7 @@ def test_bad_inputs_have_clear_messages():
 def test_plots_return_figure_and_save_png(fault, band, tmp_path):
     import matplotlib.pyplot as plt
 
-    from bearingsim.plots_signal import plot_envelope_spectrum, plot_time_history
+    from bearingsim.output.plots_signal import plot_envelope_spectrum, plot_time_history
 
     t, clean, x, t_imp = fault
     es = bsig.envelope_spectrum(x, FS, band=band)

@@ -1,4 +1,4 @@
-"""The signal stage on the device (bearingsim.signal_stage): every draw against its stated
+"""The signal stage on the device (bearingsim.signals.signal_stage): every draw against its stated
 distribution, every synthesis against the NumPy reference fed the same random numbers, and the
 whole stage's determinism (same key, same bytes; vmap = per item; chunk-independent)."""
 import jax
@@ -6,9 +6,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim import passes, sensor
-from bearingsim import signal_stage as ss
-from bearingsim.background import BACKGROUND_DEFAULTS, Background, background_signal, random_background
+from bearingsim.signals import passes, sensor
+from bearingsim.signals import signal_stage as ss
+from bearingsim.signals.background import BACKGROUND_DEFAULTS, Background, background_signal, random_background
 from bearingsim.dynamics import Realism
 
 FS = 12000.0

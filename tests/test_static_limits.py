@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from bearingsim import workflows
+from bearingsim.app import workflows
 from bearingsim.case import parse_case
-from bearingsim.cli import main
+from bearingsim.app.cli import main
 
 # reference-data.md, ISO/TS 16281 example 1: deep groove, zero clearance, Fr = 1000 N, C = 23.4 kN
 ISO_CASE = """\

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim.sweep import spall_edge_angles, sweep, sweep_angles
+from bearingsim.physics.sweep import spall_edge_angles, sweep, sweep_angles
 from conftest import DEG, ball_equilibrium_error, beyond_high_shoulder, equilibrium_error, inverted_contacts
 
 N = 61                                  # one sweep length for every test: one compilation

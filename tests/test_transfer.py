@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bearingsim.calibration import find_realdata
+from bearingsim.realism.calibration import find_realdata
 from bearingsim.case import load_case
 from bearingsim.errors import InputError
-from bearingsim.features import fault_orders
-from bearingsim.transfer import (CLASSES, DEV_RECORDS, REAL_RECORDS, Windows, composed_dataset, dev_figures,
+from bearingsim.signals.features import fault_orders
+from bearingsim.realism.transfer import (CLASSES, DEV_RECORDS, REAL_RECORDS, Windows, composed_dataset, dev_figures,
                                  dev_records, dev_text, diagnosable, evaluate, real_windows, transfer_benchmark)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -102,7 +102,7 @@ def test_dev_figures_by_hand():
 @needs_data
 @pytest.mark.slow
 def test_classifiers_trained_on_simulation_recognise_real_faults(tmp_path):
-    from bearingsim.workflows import dataset_case
+    from bearingsim.app.workflows import dataset_case
 
     pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")
     spec = load_case("dataset_cwru_4class")
@@ -119,7 +119,7 @@ def test_classifiers_trained_on_simulation_recognise_real_faults(tmp_path):
 
 
 def test_plot_transfer_writes_the_figure(tmp_path):
-    from bearingsim.plots_signal import plot_transfer
+    from bearingsim.output.plots_signal import plot_transfer
     y = np.array([0, 1, 1, 2, 3])
     w = Windows(np.zeros((5, 2)), y, np.array(["n", "o1", "o2", "i", "b"]), np.ones(5))
     reps = [evaluate(_Fixed([0, 1, 0, 2, 0]), name, w, w) for name in ("a", "b")]

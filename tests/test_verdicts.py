@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import jones, workflows
+from bearingsim.physics import jones
+from bearingsim.app import workflows
 from bearingsim.case import load_case, parse_case
-from bearingsim.cli import main
+from bearingsim.app.cli import main
 from bearingsim.errors import InvalidStateError
 from conftest import beyond_high_shoulder, beyond_low_shoulder
 
@@ -119,7 +120,7 @@ def test_set_refusals_name_their_reason_instead_of_crashing(tmp_path, capsys):
     """Codes 6-9 of a set used to crash (AttributeError '_Codes' has no 'loads'): a DT pair under a
     reverse axial load (7) and a preload of 1e9 N (6) raise InvalidStateError from Python and exit
     3 with one message from the command line; the hints are a set's."""
-    from bearingsim.sets import solve_set_case
+    from bearingsim.app.sets import solve_set_case
 
     dt = 'title = "dt"\n' + SET.format(axial=-5000, set='arrangement = "DT"\nspacing_mm = 40')
     with pytest.raises(InvalidStateError) as e:
@@ -144,7 +145,7 @@ def test_set_with_a_loaded_contact_over_a_shoulder_is_refused_like_one_bearing(t
     shoulders = "[shoulders]\ninner_high_deg = 45\n"
     text = 'title = "db"\n' + SET.format(axial=20000, set='arrangement = "DB"\nspacing_mm = 40\n'
                                          'preload_class = "light"') + shoulders
-    from bearingsim.sets import solve_set_case
+    from bearingsim.app.sets import solve_set_case
 
     sol = solve_set_case(parse_case(text, "db.toml"), throw=False)
     assert int(sol.result) == int(R.over_shoulder)
@@ -160,7 +161,7 @@ def test_set_with_a_loaded_contact_over_a_shoulder_is_refused_like_one_bearing(t
 def test_preload_above_the_static_capacity_warns(tmp_path, capsys):
     """A rigid preload of 1e6 N (p_max 5.4 GPa, C_0a of the 218 ~ 0.44 MN) used to pass silently:
     it warns as a single bearing over 4.2 GPa does, naming the static axial capacity."""
-    from bearingsim.sets import solve_set_case
+    from bearingsim.app.sets import solve_set_case
 
     text = 'title = "p"\n' + SET.format(axial=2000, set='arrangement = "DB"\nspacing_mm = 40\npreload_N = 1e6')
     with pytest.warns(jones.OverloadWarning, match="static axial capacity C_0a"):
@@ -243,7 +244,7 @@ def test_dynamic_equilibrium_of_a_deep_groove_bearing_under_a_small_axial_load(F
 
     from bearingsim.dynamics.model import build_model, initial_state_jit
     from bearingsim.dynamics.parameters import DynamicsParameters
-    from bearingsim.hertz import stiffness_curve
+    from bearingsim.physics.hertz import stiffness_curve
 
     b = bs.Bearing(8, 5.969e-3, 31.623e-3, 0.52, 0.52, 0.0)
     op = bs.Operation.from_rpm(1500.0)

@@ -1,4 +1,4 @@
-"""bearingsim.workflows: the case-driven functions the CLI, notebooks and README share."""
+"""bearingsim.app.workflows: the case-driven functions the CLI, notebooks and README share."""
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import bearingsim
-import bearingsim.sweep
-from bearingsim import workflows
+import bearingsim.physics.sweep
+from bearingsim.app import workflows
 from bearingsim.case import parse_case
 from conftest import beyond_high_shoulder
 from bearingsim.errors import InputError, InvalidStateError, NotConvergedError
@@ -55,7 +55,7 @@ def test_solve_case_passes_everything_the_case_says(monkeypatch):
 
 def test_sweep_case_passes_the_hertz_method_and_grid(monkeypatch):
     case = parse_case(BASE, "c.toml")
-    rec = Recorder(monkeypatch, bearingsim.sweep, "sweep_chunked", result=np.zeros(61))
+    rec = Recorder(monkeypatch, bearingsim.physics.sweep, "sweep_chunked", result=np.zeros(61))
     assert workflows.sweep_case(case) is rec.stub
     (b, op, loads, spall, angles), kw = rec.calls[0]
     assert kw["hertz_method"] == "brewe-hamrock" and float(spall.extent) == pytest.approx(np.radians(6))
@@ -64,7 +64,7 @@ def test_sweep_case_passes_the_hertz_method_and_grid(monkeypatch):
 
 def test_failed_states_raise_or_are_flagged(monkeypatch):
     case = parse_case(BASE, "c.toml")
-    rec = Recorder(monkeypatch, bearingsim.sweep, "sweep_chunked", result=np.r_[np.zeros(60), 1])
+    rec = Recorder(monkeypatch, bearingsim.physics.sweep, "sweep_chunked", result=np.r_[np.zeros(60), 1])
     with pytest.raises(NotConvergedError, match=r"c.toml: the cage-angle sweep failed \(item 60; 1 of 61"):
         workflows.sweep_case(case)
     assert workflows.sweep_case(case, throw=False) is rec.stub
@@ -89,7 +89,7 @@ def test_study_of_loads_is_one_batch_equal_to_one_sweep_per_value():
     assert np.mean(st.converged) > 0.6
     for m, c in enumerate(case.study_cases()):
         s = c.sweep_settings()
-        ref = bearingsim.sweep.sweep(c.bearing(), c.operation(), c.loads(), c.spall(),
+        ref = bearingsim.physics.sweep.sweep(c.bearing(), c.operation(), c.loads(), c.spall(),
                                      angles=np.linspace(s["start"], s["stop"], s["steps"]))
         np.testing.assert_array_equal(codes[m], np.asarray(ref.result))
         for n in np.flatnonzero(codes[m] == 8):
@@ -161,9 +161,9 @@ def test_a_set_case_goes_through_the_same_workflows():
     """A case with [set] takes the single-bearing entries (issue 27 item 7): solve_case returns the
     set's state (the same as the set workflow's), info_text adds the set's bearings, and
     static_command says the set's text (no JSON or plot asked: nothing else)."""
-    from bearingsim import sets
+    from bearingsim.app import sets
     from bearingsim.case import load_case
-    from bearingsim.shaft import SetSolution
+    from bearingsim.physics.shaft import SetSolution
 
     case = load_case("harris218_db_medium")
     sol = workflows.solve_case(case)

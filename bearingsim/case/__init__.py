@@ -151,13 +151,13 @@ class Case:
         return out
 
     def _material(self, path: str):
-        from ..geometry import Material
+        from ..physics.geometry import Material
         m = self.si(path)
         return Material(m["youngs_modulus"], m["poisson_ratio"], m["density"])
 
     def bearing(self):
         """:class:`bearingsim.Bearing` in SI."""
-        from ..geometry import Bearing
+        from ..physics.geometry import Bearing
         b = self.si("bearing")
         rings = self._material("material")
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
@@ -195,7 +195,7 @@ class Case:
         return "set" in self.data
 
     def _bearing_from(self, path: str):
-        from ..geometry import Bearing
+        from ..physics.geometry import Bearing
         b = self.si(path)
         rings = self._material("material")
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
@@ -209,10 +209,10 @@ class Case:
         return Bearing(*args, b["free_contact_angle"], balls, rings, design=design)
 
     def bearing_set(self):
-        """:class:`bearingsim.shaft.BearingSet` of [set] (SI; preload classes resolved), or None."""
+        """:class:`bearingsim.physics.shaft.BearingSet` of [set] (SI; preload classes resolved), or None."""
         if not self.is_set:
             return None
-        from ..shaft import BearingSet, preload_class_force
+        from ..physics.shaft import BearingSet, preload_class_force
         from .sets import set_layout
         s = self.data["set"]
         first = self.bearing()
@@ -230,7 +230,7 @@ class Case:
 
     def operation(self):
         """:class:`bearingsim.Operation` (speed in rad/s via ``Operation.from_rpm``)."""
-        from ..kinematics import Operation
+        from ..physics.kinematics import Operation
         o = self.data["operation"]
         return Operation.from_rpm(o["speed_rpm"], o["raceway_control"], o["centrifugal"], o["gyroscopic"])
 
@@ -246,7 +246,7 @@ class Case:
 
     def loads(self):
         """Inner-ring loads [Fx, Fy, Fz, Mx, My] (N, N m) as a float64 jax array."""
-        from ..jones import load_vector
+        from ..physics.jones import load_vector
         ld = self.si("load")
         return load_vector(axial=ld["axial"], radial_x=ld["radial_x"], radial_y=ld["radial_y"],
                            moment_x=ld["moment_x"], moment_y=ld["moment_y"])
@@ -255,7 +255,7 @@ class Case:
         """:class:`bearingsim.Spall` (rad, m), or None for a healthy bearing (no [defect]).  Its
         ``location`` is [defect] location; a ball pit's ``center`` is spin_angle_deg and its
         ``ball`` ball_index."""
-        from ..defect import Spall
+        from ..physics.defect import Spall
         if "defect" not in self.data:
             return None
         d = self.si("defect")

@@ -15,7 +15,7 @@ _NAMES = {"ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf": "BSF", "two_bsf":
 def characteristic_frequencies(case, speed_rpm=None) -> dict:
     """Shaft and defect frequencies (Hz) of the case at ``speed_rpm`` (default: the case's
     ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
-    from ..kinematics import defect_frequencies
+    from ..physics.kinematics import defect_frequencies
 
     n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
     shaft = from_si(to_si(n, "rpm"), "rev_s")

@@ -10,7 +10,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
-from ..defect import LOCATIONS
+from ..physics.defect import LOCATIONS
 from .messages import fmt_num, suggest
 from .units import label
 
@@ -435,7 +435,7 @@ SCHEMA: dict[str, Section] = {
                 "pass-to-pass variability of a pit's impacts: coefficient of variation of a per-pass "
                 "factor on the housing acceleration (log-normal, mean square 1) where the contact cannot "
                 "bridge the pit at all; scaled by the pit's unbridged fraction max(0, 1 - 2b/w) (b the "
-                "contact's semi-axis along the track, w the pit length; bearingsim.realism)",
+                "contact's semi-axis along the track, w the pit length; bearingsim.realism.rig_record)",
                 "", 0.0, ge=0, lt=100),
             "pass_delay_sd_max_percent": _num(
                 "pass-to-pass variability of a pit's impacts: standard deviation of a per-pass delay "
@@ -481,7 +481,7 @@ SCHEMA: dict[str, Section] = {
                                 "ball drops by its sag over the chord) or pit (a round EDM pit of "
                                 "diameter spall_length_mm narrower than the contact: the depth that "
                                 "loses the Hertz load over the pit's area at the item's own speed and "
-                                "loads, bearingsim.realism; label effective_depth_mm)",
+                                "loads, bearingsim.realism.rig_record; label effective_depth_mm)",
                                 ("machined", "pit"), "machined"),
             "speed_rpm": _range("inner-ring speed range", "rpm", _fixed_from("operation", "speed_rpm"),
                                 "[operation.speed_rpm, operation.speed_rpm]", gt=0),
@@ -538,22 +538,22 @@ SCHEMA: dict[str, Section] = {
                                               "only (0: load-zone centre, the CWRU 6:00; 90 / -90: 3:00 / "
                                               "9:00; 180: 12:00), each item one of them at random; absent: "
                                               "spall_center_deg's range", "deg", OPTIONAL),
-            "background": _enum("the machine's own vibration added to every item (bearingsim.background): "
+            "background": _enum("the machine's own vibration added to every item (bearingsim.signals.background): "
                                 "none; random (drawn per item from the ranges of "
-                                "bearingsim.background.BACKGROUND_DEFAULTS and background_rms_m_s2: shaft and "
+                                "bearingsim.signals.background.BACKGROUND_DEFAULTS and background_rms_m_s2: shaft and "
                                 "supply-frequency lines, shaped broadband noise modulated at the shaft "
                                 "rate, random knocks); machine (the [background] section, e.g. from "
                                 "bearingsim calibrate)", ("none", "random", "machine"), "none"),
             "background_rms_m_s2": _range("broadband background RMS range of background = \"random\" "
                                           "(log-uniform)", "m_s2", [0.2, 2.0], gt=0),
             "realism_ingredients": _names("issue 26's ingredients added inside the device program "
-                                          "(bearingsim.nuisance): ball_fault_model (a ball pit's signal "
+                                          "(bearingsim.signals.nuisance): ball_fault_model (a ball pit's signal "
                                           "as real damaged balls show it: spin-axis gate, contact noise over "
                                           "the pit's edge, load-zone and ring-waviness modulation), nuisance "
                                           "(shaft and looseness lines, rub, lines near bearing orders, knocks "
                                           "in every class, at the background RMS), shaft_modulation (the "
                                           "whole record modulated at shaft orders and half orders); each "
-                                          "drawn from the item's key (ranges: bearingsim.nuisance."
+                                          "drawn from the item's key (ranges: bearingsim.signals.nuisance."
                                           "NUISANCE_DEFAULTS, docs/realism.md); [] none",
                                           ("ball_fault_model", "nuisance", "shaft_modulation"), []),
             "split_fractions": Key("numbers", "train, validation and test fractions of the label field "
@@ -572,7 +572,7 @@ SCHEMA: dict[str, Section] = {
         ),
     ),
     "background": Section(
-        "The machine's own vibration (bearingsim.background), added to every data set item with "
+        "The machine's own vibration (bearingsim.signals.background), added to every data set item with "
         "dataset.background = \"machine\"; written by ``bearingsim calibrate`` from a healthy record "
         "(shaft and supply-frequency lines, the broadband part's RMS, spectral shape and shaft-rate "
         "modulation, random knocks).",

@@ -1,10 +1,10 @@
 """The [set] section: a shaft on several bearings (MODEL.md 10) -- its cross-checks (one message
-per problem, naming the key) and the :class:`bearingsim.shaft.BearingSet` it describes."""
+per problem, naming the key) and the :class:`bearingsim.physics.shaft.BearingSet` it describes."""
 from __future__ import annotations
 
 import math
 
-from ..shaft import ARRANGEMENTS, arrangement_suggestion
+from ..physics.shaft import ARRANGEMENTS, arrangement_suggestion
 from .messages import fmt_num
 
 __all__ = ["set_problems", "set_layout"]

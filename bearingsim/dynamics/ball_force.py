@@ -3,12 +3,12 @@ ball solve, and the check that picks its Newton step count.
 
 Each ball's 2x2 Jones equilibrium (centrifugal force, gyroscopic moment, defect depths H_outer
 and H_inner) is solved from the omega = 0 closed form
-(:func:`bearingsim.balls.static_ball_position`) by ``iterations`` Newton steps with the exact
-Jacobian of the transcendental-free :func:`bearingsim.balls.ball_state` (two forward-mode
+(:func:`bearingsim.physics.balls.static_ball_position`) by ``iterations`` Newton steps with the exact
+Jacobian of the transcendental-free :func:`bearingsim.physics.balls.ball_state` (two forward-mode
 directional derivatives, all element-wise over balls: XLA fuses them); the ball's loads on the
 ring are linearised about the last iterate (their error is second order in the last step).
 :func:`choose_ball_iterations` checks the count against the same solve iterated to convergence
-(the exact ball equilibrium of :func:`bearingsim.balls.balls_at`) over one ball pitch, with the
+(the exact ball equilibrium of :func:`bearingsim.physics.balls.balls_at`) over one ball pitch, with the
 ring displaced +-5 %.  A ball over a defect without inner contact is carried at the orbital
 speed of its undropped closed-form position.
 """
@@ -23,11 +23,11 @@ from jax import lax
 
 from typing import NamedTuple
 
-from ..balls import (ball_balance, ball_state, contact_record, groove_centre_offsets, groove_centre_offsets_cs,
+from ..physics.balls import (ball_balance, ball_state, contact_record, groove_centre_offsets, groove_centre_offsets_cs,
                      static_ball_position)
-from ..defect import advance, as_defects, contact_depths
+from ..physics.defect import advance, as_defects, contact_depths
 from ..fastmath import norm2, recip
-from ..kinematics import Operation, ball_kinematics_cs
+from ..physics.kinematics import Operation, ball_kinematics_cs
 from ..xla import jit
 
 __all__ = ["bearing_force", "BallCarry", "initial_ball_carry", "bearing_force_chord", "CHORD_TOL", "bearing_force_history", "RECORD_ROWS", "record_loads_angles", "ball_errors", "choose_ball_iterations", "precompile_ball_check",
@@ -42,7 +42,7 @@ ITER_TOL = 1e-3
 
 
 #: rows of the balls' per-sample record of a time loop: Q_inner, Q_outer (N) and the sines and
-#: cosines of alpha_inner, alpha_outer (:func:`bearingsim.balls.contact_record`)
+#: cosines of alpha_inner, alpha_outer (:func:`bearingsim.physics.balls.contact_record`)
 RECORD_ROWS = 6
 
 
@@ -133,8 +133,8 @@ def bearing_force(bearing, op: Operation, curve, q, psi, H_outer=None, H_inner=N
     depths at each ball's outer / inner contact (m; None: 0).  Element-wise over balls (and any
     leading batch axes of psi and the depths); transcendental-free apart from the azimuths'
     sine and cosine.  Also returns the balls' (G, H) loads on the ring (``full_state``: their
-    :class:`bearingsim.balls.BallState` at the last iterate instead; ``record``: their
-    (RECORD_ROWS, Z) record there, :func:`bearingsim.balls.contact_record`).  ``even_azimuths``:
+    :class:`bearingsim.physics.balls.BallState` at the last iterate instead; ``record``: their
+    (RECORD_ROWS, Z) record there, :func:`bearingsim.physics.balls.contact_record`).  ``even_azimuths``:
     psi are :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z), whose sines and cosines
     are then taken from theta's (the values to round-off, fewer kernels in a time step)."""
     X1, X2, G, H, state, _, (A1, A2, Ho, Hi, _) = _newton(bearing, op, curve, q, psi, H_outer, H_inner,
@@ -261,7 +261,7 @@ def bearing_force_chord(bearing, op: Operation, curve, q, psi, H_outer, H_inner,
     ``psi``: :meth:`bearingsim.Bearing.ball_azimuths` (theta + 2 pi j / Z; their sines and cosines
     are taken from theta's).
 
-    One plain evaluation of the ball equations (:func:`bearingsim.balls.ball_balance`) at
+    One plain evaluation of the ball equations (:func:`bearingsim.physics.balls.ball_balance`) at
     positions predicted from the last step's equilibria (moved with the change of the
     groove-centre offsets, :func:`_sensitivity`): the loads (not linearised) and the record are
     those of that position, and its residuals are those of exactly the reported state; a chord
@@ -315,7 +315,7 @@ def ball_errors(bearing, op, q, spall, curve, angles, scales, shaft_angles=None,
 
     The reference is the same ball solve iterated to convergence (:data:`REF_ITERATIONS` steps,
     the last changing the loads by <= :data:`REF_TOL`): the ball equations are those of
-    :func:`bearingsim.balls.balls_at`, so its fixed point is the exact ball state except for a
+    :func:`bearingsim.physics.balls.balls_at`, so its fixed point is the exact ball state except for a
     ball carried over a defect, whose orbital speed is that of its undropped closed-form position
     (tests/test_dynamics.py measures that difference against ``balls_at``).  One scan of Newton
     steps compiles in a fraction of the time of the exact solver's loops.

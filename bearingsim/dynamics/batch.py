@@ -14,13 +14,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import sensor as sensor_mod
-from ..defect import LOCATIONS, Spall
+from ..signals import sensor as sensor_mod
+from ..physics.defect import LOCATIONS, Spall
 from ..errors import InputError
-from ..hertz import stiffness_curve
-from ..jones import solve, solve_state
-from ..kinematics import Operation
-from ..newton import converged_only, retry_failed
+from ..physics.hertz import stiffness_curve
+from ..physics.jones import solve, solve_state
+from ..physics.kinematics import Operation
+from ..physics.newton import converged_only, retry_failed
 from ..xla import jit
 from .ball_force import ITER_CHOICES, choose_ball_iterations, next_iterations
 from .integrate import check_scheme, run_fixed, time_grid
@@ -146,10 +146,10 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     compiled program carries (:func:`defect_slots`; pass all a data set uses so that every
     chunk shares one program); ``params`` fields may be scalars or (N,) ((N, M) for the modes);
     ``seeds`` (N,) the items' realism seeds (default 0..N-1).  ``unbridged`` (N,): each item's
-    pit's unbridged fraction (:func:`bearingsim.pit.pit_unbridged_fraction`, needed when
+    pit's unbridged fraction (:func:`bearingsim.physics.pit.pit_unbridged_fraction`, needed when
     ``realism`` has the pass-to-pass variability on; :func:`bearingsim.dynamics.vary_sensor`).
     ``strike`` (N,) or None: each item's probability that its pit strikes on a pass (ball pits
-    whose spin axis wanders; :func:`bearingsim.passes.strike_mask`).  Never raises for an item:
+    whose spin axis wanders; :func:`bearingsim.signals.passes.strike_mask`).  Never raises for an item:
     ``result`` is per item.  ``ball_iterations``/``substeps`` None: :func:`batch_settings` on
     the extreme items of each location (:func:`extreme_items`), the largest count."""
     check_scheme(scheme)
@@ -159,7 +159,7 @@ def simulate_batch(bearing, speed_rpm, loads, spall_center, spall_extent, spall_
     if realism.pass_variation and unbridged is None:
         raise InputError("simulate_batch: the pass-to-pass variability is on (Realism."
                          "pass_amplitude_cv_max_percent / pass_delay_sd_max_percent) but no unbridged "
-                         "fraction was given; pass unbridged=(N,) (bearingsim.pit.pit_unbridged_fraction)")
+                         "fraction was given; pass unbridged=(N,) (bearingsim.physics.pit.pit_unbridged_fraction)")
     bc = lambda v: jnp.broadcast_to(jnp.asarray(v, jnp.float64), (n,))
     params = DynamicsParameters() if params is None else params
     f, z, g = params.modes()

@@ -8,13 +8,13 @@ in x, trapezoidal in v for the (linear) damping -- one bearing-force evaluation 
 order.  A ball crossing a rectangular defect edge inside a step (times known in advance from the
 motion, :func:`bearingsim.dynamics.defect_edge_times`) is integrated exactly: the force step
 weights the velocity update by where it falls (theta, 1 - theta instead of 1/2, 1/2) and the
-sensor modes see a step at that instant (:func:`bearingsim.sensor.filter_update`), so an edge
+sensor modes see a step at that instant (:func:`bearingsim.signals.sensor.filter_update`), so an edge
 costs nothing extra (no step rejection, no lax.cond: batches stay in lockstep).  ``"heun"`` /
 ``"rk4"`` are explicit Runge-Kutta alternatives without edge handling (first order at
 rectangular edges).  The state at each step's start gives the outputs and the sensor filter's
 input at no extra cost.
 
-The sensor path (one or more structural modes, :mod:`bearingsim.sensor`) is linear and one-way
+The sensor path (one or more structural modes, :mod:`bearingsim.signals.sensor`) is linear and one-way
 coupled: it is applied exactly to the housing acceleration ``a_h,x`` on the step grid
 (first-order-hold discretisation), not integrated, so it never limits the step.
 
@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from .. import sensor as sensor_mod
+from ..signals import sensor as sensor_mod
 from ..errors import InputError
 from ..xla import compiler_options, jit
 from .ball_force import initial_ball_carry

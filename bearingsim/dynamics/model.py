@@ -11,7 +11,7 @@ Degrees of freedom (10 states, SI): shaft / inner-ring translations ``x_s, y_s, 
 ``R`` is the load the balls carry (:func:`bearingsim.dynamics.bearing_force`) for the relative
 ring displacement ``q_rel = [x_s - x_h, y_s - y_h, z_s, theta_x0, theta_y0]`` (tilts held at
 their quasi-static values), the balls' azimuths and the defects where they are at that instant
-(an inner spall turned with the shaft, a ball pit with its ball: :func:`bearingsim.defect.advance`
+(an inner spall turned with the shaft, a ball pit with its ball: :func:`bearingsim.physics.defect.advance`
 with the run's shaft angle phi, so ``contact_depths(bearing, advance(spall, t, omega, omega_R),
 psi)`` at constant speed); ``v_rel = v_s - [v_h, 0]``; ``C_b = diag(2 zeta_b sqrt(K_ii m_s))``
 with K the quasi-static stiffness (contact damping); ``F_u = m_u e omega^2 [cos phi, sin phi,
@@ -37,8 +37,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from ..defect import advance, contact_depths
-from ..kinematics import Operation
+from ..physics.defect import advance, contact_depths
+from ..physics.kinematics import Operation
 from ..xla import jit
 from .ball_force import RECORD_ROWS, BallCarry, bearing_force, bearing_force_chord
 from .parameters import DynamicsParameters

@@ -13,7 +13,7 @@ The cage angle theta_c(t), the shaft angle phi(t) and the shaft speed are drawn 
   (Randall & Antoni 2011: 1-2 %).  The cage angle is piecewise linear in the nominal progress;
   the phase is a random walk (the envelope's BPFO harmonics broaden as k^2).
 
-Where a defect is at time t (:func:`bearingsim.defect.advance` with the run's own angles): an
+Where a defect is at time t (:func:`bearingsim.physics.defect.advance` with the run's own angles): an
 outer spall stays; an inner spall turns with the shaft, centre + phi(t); a ball pit turns with
 its ball, spin angle theta_b0 + k phi(t) with k = omega_R / omega the ball's spin speed relative
 to the cage per unit shaft speed (2 pi BSF / omega), so speed fluctuation reaches every class.
@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..defect import as_defects
+from ..physics.defect import as_defects
 from ..keys import STREAMS
 from .parameters import Realism
 

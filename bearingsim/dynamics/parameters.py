@@ -96,7 +96,7 @@ class Realism(NamedTuple):
     variability of a pit's impacts (coefficient of variation of a per-pass factor; standard
     deviation of a per-pass delay, % of the pass interval) where the contact cannot bridge the
     pit at all; a run scales both by the pit's unbridged fraction
-    (:func:`bearingsim.pit.pit_unbridged_fraction`)."""
+    (:func:`bearingsim.physics.pit.pit_unbridged_fraction`)."""
 
     slip_percent: float = 0.0
     speed_fluctuation_percent: float = 0.0

@@ -29,13 +29,13 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from .. import sensor as sensor_mod
-from ..defect import LOCATIONS, Spall
-from ..hertz import stiffness_curve
-from ..jones import solve_state
+from ..signals import sensor as sensor_mod
+from ..physics.defect import LOCATIONS, Spall
+from ..physics.hertz import stiffness_curve
+from ..physics.jones import solve_state
 from ..keys import item_keys
-from ..kinematics import Operation, defect_frequencies
-from ..pit import pit_of_solution_device
+from ..physics.kinematics import Operation, defect_frequencies
+from ..physics.pit import pit_of_solution_device
 from ..xla import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
 from .integrate import advance_record, check_scheme, jumps_device, stages_device
@@ -140,7 +140,7 @@ def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, exten
                     hertz_method, pit=None):
     """The items' states and the ball check.  ``pit`` (pit diameter, machined depth) (N,) each,
     or None: ``depth`` is then each fault item's effective pit depth
-    (:func:`bearingsim.pit.pit_of_solution_device`) from its healthy state with ball 0 at the pit
+    (:func:`bearingsim.physics.pit.pit_of_solution_device`) from its healthy state with ball 0 at the pit
     (an outer pit) or at azimuth 0 (an inner or ball pit), solved first in the same program:
     the two solves are one ``lax.scan`` of two passes, so the solve is traced once."""
     if pit is None:
@@ -295,7 +295,7 @@ class ChunkProgram:
                  iterations=None, pit=None):
         """Simulate one chunk: ``keys`` (N, 2) uint32 (``jax.random`` keys, one per item),
         ``speed_rpm`` (N,), ``loads`` (N, 5) N / N m, ``theta0`` (N,) cage angle at t = 0 (rad),
-        ``location`` (N,) int (index in :data:`bearingsim.defect.LOCATIONS`), ``center``,
+        ``location`` (N,) int (index in :data:`bearingsim.physics.defect.LOCATIONS`), ``center``,
         ``extent`` (rad) and ``depth`` (m) (N,) of the item's defect (depth 0: healthy),
         ``modes`` ((N, M) frequencies Hz, damping ratios, gains), ``params`` a
         :class:`DynamicsParameters` whose fields are (N,) arrays (its modes are not used:

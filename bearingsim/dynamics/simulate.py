@@ -15,14 +15,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import sensor as sensor_mod
-from ..defect import Spall, as_defects
+from ..signals import sensor as sensor_mod
+from ..physics.defect import Spall, as_defects
 from ..errors import InputError
-from ..hertz import stiffness_curve
-from ..jones import result_hint, solve
-from ..kinematics import Operation, defect_frequencies
-from ..passes import pass_variation
-from ..pit import pit_unbridged_fraction
+from ..physics.hertz import stiffness_curve
+from ..physics.jones import result_hint, solve
+from ..physics.kinematics import Operation, defect_frequencies
+from ..signals.passes import pass_variation
+from ..physics.pit import pit_unbridged_fraction
 from ..xla import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
@@ -87,7 +87,7 @@ def load_zone_centre(loads) -> float:
 
 def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     """(unbridged fraction, ok) of the one defect in ``defects``, taken as a round pit of its
-    arc length under the healthy contact (:func:`bearingsim.pit.pit_unbridged_fraction`):
+    arc length under the healthy contact (:func:`bearingsim.physics.pit.pit_unbridged_fraction`):
     the outer contact of the ball at an outer pit, the inner contact of the ball at the load
     zone's centre for an inner pit, both for a ball pit.  The healthy state is the defective
     solve's own program with depth 0 (no compilation).  ``ok`` False: it did not converge."""
@@ -109,15 +109,15 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
 def vary_sensor(a_h, sens, fs, pass_times, realism, unbridged, seeds, modes, labels=None, strike=None):
     """Sensor signals (N, T) with the pass-to-pass variability of a pit's impacts: each item's
     housing acceleration ``a_h`` (N, T) (x) varied pass by pass
-    (:func:`bearingsim.passes.pass_variation`: c.v. and delay s.d. the realism's maxima times
+    (:func:`bearingsim.signals.passes.pass_variation`: c.v. and delay s.d. the realism's maxima times
     the item's unbridged fraction, drawn from its seed; ``pass_times`` N arrays) and put through
-    the sensor modes ``(f, zeta, g)`` ((M,) or (N, M); :func:`bearingsim.sensor.apply_sensor_batch`,
+    the sensor modes ``(f, zeta, g)`` ((M,) or (N, M); :func:`bearingsim.signals.sensor.apply_sensor_batch`,
     the input linear between samples, one program per N).  Rows with ``unbridged`` 0 keep
     ``sens``.  The variability is a per-pass effective depth and exit time acting on the sensor
     path only: displacements and housing acceleration stay the ODE's.  ``labels`` (N dicts)
     get each item's ``unbridged_fraction``, ``pass_amplitude_cv_percent``,
     ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``.  ``strike`` (N,) or None:
-    each item's probability that its pit strikes on a pass (:func:`bearingsim.passes.strike_mask`;
+    each item's probability that its pit strikes on a pass (:func:`bearingsim.signals.passes.strike_mask`;
     rows with a probability < 1 are varied whatever their unbridged fraction)."""
     u = np.asarray(unbridged, float)
     p = np.ones(u.shape) if strike is None else np.broadcast_to(np.asarray(strike, float), u.shape)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import life
+from bearingsim.physics import life
 
 # reference-data.md: deep-groove ball bearing, Z = 7, D = 11.5 mm, d_m = 43.5 mm, f_i = 0.52,
 # f_o = 0.53, E = 210 GPa, nu = 0.3 (both bodies), C = 23.4 kN, zero speed.

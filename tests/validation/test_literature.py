@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import hertz
+from bearingsim.physics import hertz
 from bearingsim.xla import compiler_options
 from conftest import DEG
 

@@ -1,4 +1,4 @@
-"""The set solve (bearingsim.shaft) against the independent numpy/scipy reference of MODEL.md 10
+"""The set solve (bearingsim.physics.shaft) against the independent numpy/scipy reference of MODEL.md 10
 (``benchmarks/reference_scipy.py: solve_set``, written from the page alone: every ball of every
 bearing and the shaft in one hybr system).  Agreement <= 1e-9 relative (issue 21 target): shaft
 displacement (tilts as displacements at 0.1 m), each bearing's loads, every ball's contact loads
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
-from bearingsim import shaft
+from bearingsim.physics import shaft
 
 _REF_PATH = pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "reference_scipy.py"
 _spec = importlib.util.spec_from_file_location("reference_scipy", _REF_PATH)

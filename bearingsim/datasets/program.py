@@ -1,0 +1,316 @@
+"""The device program of a data set: one chunk of items in, its signals and simulated labels out.
+
+:func:`simulate_chunk` (plan, k) is the unit of work (in-process and on the Dask workers).  It
+pads chunk ``k`` to a multiple of the micro-batch width W (:func:`micro_batch`: cpu 16, gpu
+1024) with its last item and calls :func:`device_program` once: per micro-batch of W items the
+chunk program of :func:`bearingsim.dynamics.chunk_program` (quasi-static states and the pits'
+effective depths, the Newton step count of the micro-batch from its menu, motion and the
+record's time loop) and the signal stage :func:`bearingsim.signals.signal_stage.finish_items` (pass
+variability and strikes, noise, background, fault level, issue 26's ingredients), every draw
+from the item's key (:mod:`bearingsim.keys`).  The host puts the chunk's label arrays on the
+device and takes the outputs back, both explicitly; it draws nothing and loops over no item.
+Every program runs W items wide whatever the chunk size, so the bytes of an item do not depend
+on the chunk size or the worker count (on the same device type).
+
+Also here: :func:`run_settings` (the data set's substeps, fixed once) and :func:`pit_depths`,
+the host twin of the pit depths the chunk program computes (kept as a public helper, and for
+the pass variability of ``depth_rule = "machined"``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import dynamics
+from ..case.units import from_si, to_si
+from .spec import DatasetResult, item_locations
+
+__all__ = ["CHUNK_FIELDS", "BACKGROUND_FIELDS", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "Physics", "micro_batch",
+           "chunk_keys", "plan_program", "device_program", "simulate_chunk", "pit_depths", "pit_depths_batch",
+           "run_settings"]
+
+BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
+                     "background_knock_rate_Hz")
+#: the per-item label fields a chunk file carries (besides index and signals)
+CHUNK_FIELDS = ("result", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent", "pass_delay_sd_percent",
+                "pass_amplitude_cv_percent", "signal_gain", "snr_dB", "effective_depth_mm",
+                "unbridged_fraction") + BACKGROUND_FIELDS
+
+
+@dataclass(frozen=True, eq=False)
+class Physics:
+    """The built physics objects every item of a data set shares (SI; no case file)."""
+
+    bearing: object
+    params: object              # dynamics.DynamicsParameters
+    realism: object             # dynamics.Realism
+    control: str
+    hertz_method: str
+    cage_angle: float
+    profile: str
+
+    @classmethod
+    def of_case(cls, case):
+        d = case.dynamics_settings()
+        return cls(case.bearing(), dynamics.DynamicsParameters.from_settings(d), dynamics.Realism.from_settings(d),
+                   case.data["operation"]["raceway_control"], case.hertz_method, float(case.cage_angle),
+                   case.data.get("defect", {}).get("profile", "rectangular"))
+
+
+#: the micro-batch width W of the device programs per JAX platform: every program call is W items
+#: wide (the chunk is a loop over its micro-batches), so that an item's bytes do not depend on the
+#: chunk size or the worker count (XLA's kernels may round the last bits by batch width)
+MICRO_BATCH = {"cpu": 16, "gpu": 1024}
+#: W of a platform not in :data:`MICRO_BATCH`
+DEFAULT_MICRO_BATCH = 1024
+
+
+def micro_batch(platform) -> int:
+    """The micro-batch width W of JAX platform ``platform`` ("cpu", "gpu", ...; None: JAX's default):
+    :data:`MICRO_BATCH` (cpu 16: a chunk of 16 items per core fills a CPU; gpu 1024: enough items
+    per program to fill an H100's SMs at a few MB per item), else :data:`DEFAULT_MICRO_BATCH`."""
+    if platform is None:
+        import jax
+        platform = jax.devices()[0].platform
+    return MICRO_BATCH.get(str(platform), DEFAULT_MICRO_BATCH)
+
+
+def chunk_keys(lab_key) -> np.ndarray:
+    """(N, 2) uint32 key data of the label field ``key`` (word0 << 32 | word1)."""
+    k = np.asarray(lab_key, np.uint64)
+    return np.stack([(k >> np.uint64(32)).astype(np.uint32), (k & np.uint64(0xFFFFFFFF)).astype(np.uint32)], -1)
+
+
+_PROGRAMS: dict = {}
+
+
+def plan_program(plan):
+    """The :class:`bearingsim.dynamics.ChunkProgram` of ``plan`` (built once per plan and process:
+    the plan is pickled to Dask workers without it) and the plan's per-width constants."""
+    import jax
+    import jax.numpy as jnp
+
+    key = id(plan)
+    hit = _PROGRAMS.get(key)
+    if hit is not None and hit[0] is plan:
+        return hit[1], hit[2]
+    ph = plan.physics
+    T = int(round(plan.duration * plan.fs))
+    prog = dynamics.chunk_program(ph.bearing, slots=plan.slots, profile=ph.profile, control=ph.control,
+                                  hertz_method=ph.hertz_method, sample_rate=plan.fs, samples=T,
+                                  substeps=plan.substeps, scheme="newmark", realism=ph.realism,
+                                  max_speed_rpm=float(np.max(plan.lab["speed_rpm"])))
+    W = plan.width
+    dev = jax.devices(plan.device)[0] if plan.device else jax.devices()[0]
+    params = jax.device_put(jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (W,)) if jnp.ndim(a) == 0 else a,
+                                                   ph.params), dev)
+    if len(_PROGRAMS) > 4:
+        _PROGRAMS.clear()
+    _PROGRAMS[key] = (plan, prog, (dev, params))
+    return prog, (dev, params)
+
+
+def _host_inputs(plan, pad):
+    """The per-item inputs of the padded items ``pad`` as host arrays (no per-item work)."""
+    from ..physics.defect import LOCATIONS
+    from ..signals.signal_stage import ItemDraws
+
+    lab = plan.lab[pad]
+    n = pad.size
+    loads = np.zeros((n, 5))
+    loads[:, 0], loads[:, 2] = lab["radial_N"], lab["axial_N"]
+    li = np.select([plan.loc[pad] == L for L in LOCATIONS], list(range(len(LOCATIONS))), 0)
+    modes = np.asarray(plan.modes[pad], float)
+    sim = dict(keys=chunk_keys(lab["key"]), speed_rpm=np.asarray(lab["speed_rpm"], float), loads=loads,
+               theta0=np.full(n, float(plan.physics.cage_angle)), location=li.astype(np.int32),
+               center=np.asarray(plan.center[pad], float), extent=np.asarray(plan.extent[pad], float),
+               depth=np.asarray(plan.depth[pad], float), modes=tuple(np.ascontiguousarray(modes[..., j])
+                                                                    for j in range(3)))
+    if plan.pit:
+        sim["pit"] = (to_si(np.asarray(lab["spall_length_mm"], float), "mm"),
+                      to_si(np.asarray(lab["spall_depth_mm"], float), "mm"))
+    draws = ItemDraws(modes, np.asarray(lab["signal_gain"], float), np.asarray(lab["snr_dB"], float),
+                      np.asarray(lab["strike_probability"], float), np.asarray(lab["spall_center_deg"], float))
+    sig = dict(fault_class=np.asarray(lab["fault_class"], np.int32), draws=draws,
+               unbridged=None if plan.unbridged is None else np.asarray(plan.unbridged[pad], float))
+    return sim, sig
+
+
+def device_program(plan, pad):
+    """The chunk's programs on the padded item indices ``pad`` (a multiple of ``plan.width``
+    items): per micro-batch of W = ``plan.width`` items the chunk program
+    (:func:`bearingsim.dynamics.chunk_program`: states, pit depths, Newton count, motion, time
+    loop) and the signal stage (:func:`bearingsim.signals.signal_stage.finish_items`: pass variability,
+    strikes, noise, background, fault level, issue 26's ingredients), every draw from the item's
+    key.  The inputs go to the device explicitly (``jax.device_put``) and the outputs come back
+    explicitly (``jax.device_get``): no implicit transfer and no per-item host work.  Returns a
+    dict of (len(pad),) / (len(pad), T) host arrays: the signals and :data:`CHUNK_FIELDS`."""
+    import jax
+
+    from ..signals.signal_stage import finish_items
+
+    prog, (dev, params) = plan_program(plan)
+    W = plan.width
+    if pad.size % W:
+        raise ValueError(f"a chunk is a multiple of the micro-batch width {W}, got {pad.size} items")
+    sim, sig = _host_inputs(plan, pad)
+    parts = []
+    for j in range(0, pad.size, W):             # micro-batches (the same compiled programs), not items
+        cut = lambda a: jax.tree_util.tree_map(lambda v: v[j:j + W], a)  # noqa: E731
+        s_in = jax.device_put(cut(sim), dev)
+        g_in = jax.device_put(cut({k: v for k, v in sig.items() if v is not None}), dev)
+        out = prog(s_in["keys"], s_in["speed_rpm"], s_in["loads"], s_in["theta0"], s_in["location"],
+                   s_in["center"], s_in["extent"], s_in["depth"], s_in["modes"], params, pit=s_in.get("pit"))
+        unb = g_in["unbridged"] if "unbridged" in g_in else out["unbridged"]
+        freqs = jax.numpy.stack([out[k] for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")], -1)
+        x, lb = finish_items(s_in["keys"], out["housing_acceleration"], out["sensor"], out["pass_times"], unb,
+                             g_in["fault_class"], out["shaft_Hz"], g_in["draws"], plan.signal, freqs)
+        keep = {k: out[k] for k in ("result", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent",
+                                    "pit_depth", "unbridged", "pit_ok")}
+        host = jax.device_get((x, lb, keep))
+        host[2]["ball_iterations"] = np.full(W, out["ball_iterations"], np.int32)
+        parts.append(host)
+    cat = lambda i, k: np.concatenate([p[i][k] for p in parts])  # noqa: E731
+    sig_all = np.concatenate([p[0] for p in parts])
+    code = cat(2, "result").astype(np.int32)
+    code = np.where((code == 0) & ~cat(1, "finite"), int(DatasetResult.nonfinite_signal), code)
+    code = np.where(cat(2, "pit_ok"), code, int(DatasetResult.pit_contact))
+    ok = code == 0
+    out = dict(signals=np.where(ok[:, None], sig_all, 0.0).astype(np.float32), result=code,
+               ball_iterations=cat(2, "ball_iterations"))
+    for k in ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent") + BACKGROUND_FIELDS:
+        out[k] = np.asarray(cat(1, k), float)
+    out["pass_jitter_percent"] = np.asarray(cat(2, "pass_jitter_percent"), float)
+    for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
+        v = np.asarray(cat(2, k), float)
+        out[k] = np.where(np.isfinite(v) & ok, v, 0.0)
+    if plan.pit:
+        out["effective_depth_mm"] = from_si(np.asarray(cat(2, "pit_depth"), float), "mm")
+        out["unbridged_fraction"] = np.asarray(cat(2, "unbridged"), float)
+    else:
+        out["effective_depth_mm"] = from_si(np.asarray(plan.depth[pad], float), "mm")
+        out["unbridged_fraction"] = (np.zeros(pad.size) if plan.unbridged is None
+                                     else np.asarray(plan.unbridged[pad], float))
+    return out
+
+
+def simulate_chunk(plan, k: int) -> dict:
+    """Chunk ``k`` of a data set: the arrays of its chunk file (``index``, ``signals`` and the
+    per-item label fields the simulation fills, :data:`CHUNK_FIELDS`, and ``ball_iterations``:
+    the Newton count each item's micro-batch ran with).  A pure function of (plan, k): every
+    item's draws come from its own key and every program runs on micro-batches of the fixed
+    width ``plan.width`` (the chunk padded to a multiple of it with its last item; only the
+    micro-batches holding items run), so the in-process loop, any chunk size that is a multiple
+    of the width and any Dask worker give the same bytes on the same device type.  Runs on
+    ``plan.device`` (a JAX platform name; None: JAX's default)."""
+    import contextlib
+
+    import jax
+
+    idx = plan.items(k)
+    m = idx.size
+    W = plan.width
+    pad = np.concatenate([idx, np.repeat(idx[-1:], -(-m // W) * W - m)])
+    where = jax.default_device(jax.devices(plan.device)[0]) if plan.device else contextlib.nullcontext()
+    with where:
+        out = device_program(plan, pad)
+    return dict(index=idx, **{name: v[:m] for name, v in out.items()})
+
+
+def pit_depths(physics, lab, chunk, slots, profile=None, imap=None):
+    """(depth in m, ok, unbridged fraction) per item for ``[dataset] depth_rule = "pit"`` (and
+    for the pass-to-pass variability, which scales with the unbridged fraction of the item's
+    pit under the same contact, :func:`bearingsim.physics.pit.pit_unbridged_fraction`): every fault item's defect
+    is a round EDM pit of diameter ``spall_length_mm`` and machined depth ``spall_depth_mm``
+    narrower than the ball's contact ellipse, and the simulation takes the depth that loses the
+    same Hertz load (:func:`bearingsim.physics.pit.pit_depth_of_solution`: the ball keeps rolling on
+    the raceway beside the pit; the groove rule of the machined depth would let it drop by its
+    sag over the chord, ~w^2 / 4D, and its impacts grow with the square of the size).
+
+    ``physics``: a :class:`Physics` (or a case, whose physics is built).  Each item's healthy
+    contact at its own speed and loads comes from one batched quasi-static solve per ``chunk``
+    items (:func:`bearingsim.dynamics.quasi_static_batch` with depth-0 slots: the program the
+    simulation compiles anyway), with ball 0 at the pit for an outer-race pit and at the
+    load-zone centre (azimuth 0: the radial load is along +x) for an inner-race or ball pit.
+    ``ok`` is False where that state did not converge (the item is then flagged ``pit_contact``);
+    healthy items get 0 (depth and fraction).  ``imap`` runs the batches (in this process by
+    default; :mod:`bearingsim.datasets.distributed` on a Dask cluster): each is :func:`pit_depths_batch`
+    of the same items, so the numbers do not depend on where it ran."""
+    if not isinstance(physics, Physics):
+        physics = Physics.of_case(physics)
+    profile = physics.profile if profile is None else profile
+    n = lab.size
+    out, ok, unbridged = np.zeros(n), np.ones(n, bool), np.zeros(n)
+    faulty = np.flatnonzero(~lab["healthy"])
+    batches = [faulty[k:k + chunk] for k in range(0, faulty.size, chunk)]
+    run = imap or (lambda fn, shared, items: ((x, fn(shared, x)) for x in items))
+    for idx, (d, good, u) in run(pit_depths_batch, (physics, lab, chunk, slots, profile), batches):
+        out[idx], ok[idx], unbridged[idx] = d, good, u
+    return out, ok, unbridged
+
+
+def pit_depths_batch(shared, idx):
+    """(depth in m, ok, unbridged fraction) of the fault items ``idx`` (at most ``chunk``; padded
+    to ``chunk`` so that every batch is one program): one batch of :func:`pit_depths`; ``shared``
+    is ``(physics, lab, chunk, slots, profile)``."""
+    import jax
+    import jax.numpy as jnp
+
+    from ..physics.kinematics import Operation
+    from ..physics.pit import pit_depth_of_solution, pit_unbridged_fraction
+
+    ph, lab, chunk, slots, profile = shared
+    b = ph.bearing
+    loc = item_locations(lab)
+    w = to_si(lab["spall_length_mm"], "mm")
+    machined = to_si(lab["spall_depth_mm"], "mm")
+    center = to_si(lab["spall_center_deg"], "deg")
+    out, ok, unbridged = np.zeros(idx.size), np.ones(idx.size, bool), np.zeros(idx.size)
+    pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - idx.size)])
+    m = pad.size
+    one = jnp.ones(m)
+    op = Operation(jnp.asarray(2 * np.pi * lab["speed_rpm"][pad] / 60.0), ph.control, one, one)
+    F = np.zeros((m, 5))
+    F[:, 0], F[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
+    th = np.where(loc[pad] == "outer", center[pad], 0.0)
+    zero = np.zeros(m)
+    slots_h = dynamics.defect_slots(loc[pad], zero, zero, zero, profile, slots)
+    sols = dynamics.quasi_static_batch(b, op, jnp.asarray(F), jnp.asarray(th), slots_h, ph.hertz_method)
+    host = jax.tree_util.tree_map(np.asarray, sols)
+    for j, i in enumerate(idx):     # the integrator replaces this loop with the device pit depths (l1)
+        if int(host.result[j]) != 0:
+            ok[j] = False
+            continue
+        sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
+        out[j] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
+        unbridged[j] = pit_unbridged_fraction(sol_j, b, 0, str(loc[i]), w[i])
+    return out, ok, unbridged
+
+
+def run_settings(physics, lab, extent, depth, center, fs) -> int:
+    """Substeps per sample for the whole data set: :func:`dynamics.batch_settings` on the extreme
+    items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and least
+    loaded, largest defect), the largest, fixed once so that no chunk recompiles.  (The Newton
+    step count is chosen per micro-batch inside the chunk program.)"""
+    from ..physics.defect import Spall
+    from ..physics.jones import load_vector
+    from ..physics.kinematics import Operation
+    from .spec import slots_of
+
+    ph = physics
+    slots = slots_of(lab)
+    loc = item_locations(lab)
+    load = lab["radial_N"] + lab["axial_N"]
+    size = np.asarray(extent, float) * np.asarray(depth, float)
+    check = dynamics.extreme_items(lab["fault_class"], lab["speed_rpm"], load, size)
+    subs = []
+    for i in check:
+        op = Operation.from_rpm(float(lab["speed_rpm"][i]), ph.control, True, True)
+        F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
+        sp = tuple(Spall(float(center[i]) if L == loc[i] else 0.0, float(extent[i]) if L == loc[i] else 0.0,
+                         float(depth[i]) if L == loc[i] else 0.0, ph.profile, L, 0) for L in slots)
+        it, sub = dynamics.batch_settings(ph.bearing, op, F, sp, ph.cage_angle, fs, ph.params, ph.hertz_method)
+        if it is not None:
+            subs.append(sub)
+    return max(subs, default=1)

@@ -1,0 +1,258 @@
+"""The runner of a data set: the chunk plan, the device, the in-process loop or a Dask
+cluster, interrupts, and the orchestration :func:`make_dataset`.
+
+Device (``make_dataset(device=)``, CLI ``--device cpu|gpu``): JAX's default (the GPU where JAX
+sees one) unless named; the summary says which device ran.  Chunk size: the spec's
+``[dataset] chunk``, or with ``chunk = 0`` (or ``chunk="auto"``) what fills the device
+(:func:`default_chunk`): on a CPU 16 items per core; on a GPU as many items as fit in a quarter
+of its memory at :data:`BYTES_PER_SAMPLE` bytes per item and sample, at most
+:data:`MAX_GPU_CHUNK`.  The chunk size changes no drawn label, and the signals (with the gain
+a target SNR sets from them) only in their last bits (the dynamics batch rounds by batch width;
+docs/scale.md).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..case import check_sampling
+from ..errors import BearingsimError, InputError
+from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, run_settings, simulate_chunk
+from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
+                   transfer_paths)
+from .writer import (assemble, finished_chunks, open_partial, partial_path, read_chunk, spec_record, chunk_path,
+                     write_chunk)
+
+__all__ = ["ChunkPlan", "Interrupted", "serial_imap", "make_dataset", "resolve_device", "default_chunk",
+           "BYTES_PER_SAMPLE", "MAX_GPU_CHUNK", "DEVICES"]
+
+#: the device names of ``--device`` (JAX platform names)
+DEVICES = ("cpu", "gpu")
+#: device memory per item and sample of a chunk's program (states, accelerations, sensor; a
+#: generous figure: the GPU chunk rule keeps to a quarter of the device memory)
+BYTES_PER_SAMPLE = 512
+MAX_GPU_CHUNK = 8192
+
+
+class Interrupted(BearingsimError):
+    """The run was interrupted (Ctrl-C / SIGTERM); finished chunks are kept (exit code 130)."""
+
+    exit_code = 130
+
+
+class _Stop(BaseException):
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.name = signal.Signals(signum).name
+
+
+@contextmanager
+def _signals_stop():
+    """SIGINT and SIGTERM raise :class:`_Stop` (so that cleanup runs) while the block runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise _Stop(signum)
+
+    old = {sg: signal.signal(sg, handler) for sg in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sg, h in old.items():
+            signal.signal(sg, h)
+
+
+def serial_imap(fn, shared, items):
+    """``(item, fn(shared, item))`` for every item, in this process, in order: how the chunks of
+    a data set (and the batches of :func:`pit_depths`) run without a cluster.
+    :class:`bearingsim.datasets.distributed.DaskRunner` has the same ``imap`` on a Dask cluster."""
+    for x in items:
+        yield x, fn(shared, x)
+
+
+def resolve_device(device=None):
+    """The JAX device a data set runs on: ``device`` "cpu" | "gpu" | None (JAX's default: the
+    GPU where JAX sees one).  A GPU asked for where JAX sees none is one clear InputError."""
+    import jax
+
+    if device is None:
+        return jax.devices()[0]
+    if device not in DEVICES:
+        raise InputError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
+    try:
+        return jax.devices(device)[0]
+    except RuntimeError:
+        raise InputError(f"--device {device}: JAX sees no {device.upper()} (devices: "
+                         f"{', '.join(str(d) for d in jax.devices())}); for an NVIDIA GPU: "
+                         "pip install -U \"jax[cuda12]\"") from None
+
+
+def default_chunk(dev, samples, count) -> int:
+    """Items per chunk that fill the device ``dev``: CPU 16 per core; GPU as many as fit in a
+    quarter of its memory at :data:`BYTES_PER_SAMPLE` per item and sample (at most
+    :data:`MAX_GPU_CHUNK`); never more than ``count``."""
+    if dev.platform == "cpu":
+        n = 16 * (os.cpu_count() or 1)
+    else:
+        try:
+            mem = int((dev.memory_stats() or {}).get("bytes_limit", 16 << 30))
+        except Exception:       # noqa: BLE001 - a backend without memory_stats
+            mem = 16 << 30
+        n = min(MAX_GPU_CHUNK, max(16, mem // 4 // (BYTES_PER_SAMPLE * max(int(samples), 1))))
+    return max(1, min(int(n), int(count)))
+
+
+@dataclass(frozen=True, eq=False)
+class ChunkPlan:
+    """Everything the chunks of one data set need, built and drawn before any chunk runs: the
+    physics objects (no case file), the labels and the per-item inputs (picklable: a Dask run
+    sends it once to every worker; the compiled programs are built in each process,
+    :func:`bearingsim.datasets.program.plan_program`).  ``simulate_chunk(plan, k)`` is chunk
+    ``k``: a loop over its micro-batches of ``width`` items, each the same compiled programs."""
+
+    physics: Physics
+    lab: np.ndarray
+    order: np.ndarray
+    chunk: int                      # items per chunk: a multiple of width
+    loc: np.ndarray
+    center: np.ndarray
+    extent: np.ndarray
+    depth: np.ndarray               # machined depth (m); with pit, > 0 marks the fault items
+    duration: float
+    fs: float
+    substeps: int
+    slots: tuple
+    modes: np.ndarray               # (N, M, 3) every item's sensor modes (transfer_paths)
+    signal: object                  # signal_stage.SignalSettings (static)
+    pit: bool = False               # depth_rule "pit": the effective depths inside the chunk program
+    unbridged: np.ndarray = None    # depth_rule "machined" with pass variability: host pit_depths' fractions
+    width: int = 16                 # micro-batch width W of every program call (program.micro_batch)
+    device: str = None              # JAX platform ("cpu", "gpu"); None: the worker's default
+
+    @property
+    def chunks(self) -> int:
+        return -(-self.lab.size // self.chunk)
+
+    def items(self, k) -> np.ndarray:
+        """Item indices of chunk ``k`` (the classes spread evenly over the chunks)."""
+        return self.order[k * self.chunk:(k + 1) * self.chunk]
+
+
+def signal_settings(case, ds, fs, T, physics):
+    """The :class:`bearingsim.signals.signal_stage.SignalSettings` of the case's [dataset] (static)."""
+    from ..signals.signal_stage import SignalSettings
+
+    machine = None
+    if ds.get("background", "none") == "machine":
+        from ..signals.background import Background
+        sec = case.si("background") if "background" in case.data else {}
+        machine = Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
+                             tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
+                             tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels") or ()),
+                             tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
+                             float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
+                             float(sec.get("knock_damping_ratio", 0.05)))
+    return SignalSettings.from_dataset(ds, fs, T, physics.realism, physics.params.modes(), machine)
+
+
+def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=None,
+                 compression=None) -> DatasetSummary:
+    """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5), resumably.
+
+    Finished chunks go to :func:`partial_path` at once; a rerun after an interruption continues
+    from them; the file is assembled when all are there.  Ctrl-C / SIGTERM raise
+    :class:`Interrupted`.  ``runner``: an object with ``imap(fn, shared, items)`` like
+    :func:`serial_imap` (which runs when ``runner`` is None): :class:`bearingsim.datasets.distributed.DaskRunner`
+    runs the chunks on a Dask cluster; the file is the same.  ``device``: "cpu" | "gpu" | None
+    (:func:`resolve_device`); ``chunk``: items per chunk (None: the spec's ``chunk``; 0 or "auto":
+    :func:`default_chunk`); ``compression`` of /signals: "none" (default), "gzip", "zstd", "lzf", "gzip1"
+    (:mod:`bearingsim.datasets.writer`).  Returns a :class:`DatasetSummary` (``failed``: items with
+    result != 0; ``seconds``: wall time of this run's simulations, compilation included;
+    ``device``, ``chunk``)."""
+    import jax
+    from tqdm import tqdm
+
+    from .writer import compression_options
+    compression_options(compression)                    # a bad name fails before any work
+    imap = serial_imap if runner is None else runner.imap
+    ds = settings(case)
+    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
+    o = case.data["operation"]
+    # simulate_batch uses the default centrifugal/gyroscopic flags of Operation
+    if not (o["centrifugal"] and o["gyroscopic"]):
+        raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
+                         "operation.gyroscopic true (the batch simulation always includes them)")
+    dev = resolve_device(device)
+    ph = Physics.of_case(case)
+    fs = float(case.dynamics_settings()["sample_rate"])
+    duration = float(ds["duration_s"])
+    T = int(round(duration * fs))
+    lab = draw_labels(case)
+    n = lab.size
+    chunk = ds.get("chunk", 16) if chunk is None else chunk
+    chunk = default_chunk(dev, T, n) if chunk in (0, "auto") else min(int(chunk), n)
+    width = micro_batch(dev.platform)
+    chunk = -(-chunk // width) * width              # a whole number of micro-batches
+    slots = slots_of(lab)
+    loc, extent, depth, center = defect_geometry(ph.bearing, lab)
+    folder = partial_path(path)
+    spec = spec_record(case, ds, n, T, fs, chunk)
+    t0 = time.perf_counter()
+    done = 0
+    bar = None
+    where = jax.default_device(dev) if runner is None else contextlib.nullcontext()
+    try:
+        with _signals_stop(), where:
+            pit = ds.get("depth_rule", "machined") == "pit"
+            unbridged = None
+            if not pit and ph.realism.pass_variation:   # the host twin: the machined depth is simulated
+                _, pit_ok, unbridged = pit_depths(ph, lab, chunk, slots, imap=imap)
+                unbridged = np.where(pit_ok, unbridged, 0.0)
+            lab["slip_percent"] = ph.realism.slip_percent
+            lab["speed_fluctuation_percent"] = ph.realism.speed_fluctuation_percent
+            lab["noise_rms_m_s2"] = ph.realism.noise_rms
+            modes = transfer_paths(case, lab)
+            chunks = -(-n // chunk)
+            sub = open_partial(folder, spec, lambda: run_settings(ph, lab, extent, depth, center, fs))
+            todo = [k for k in range(chunks) if not chunk_path(folder, k).exists()]
+            done = n - sum(min(chunk, n - k * chunk) for k in todo)
+            bar = tqdm(total=n, initial=done, desc=f"dataset ({dev.platform})", unit="item",
+                       disable=None if progress else True, dynamic_ncols=True)
+            plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
+                             duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
+                             width, dev.platform)
+            for k, out in imap(simulate_chunk, plan, todo):     # finished chunks, streamed
+                write_chunk(folder, k, out)
+                done += out["index"].size
+                bar.update(out["index"].size)
+                del out
+            bar.close()
+            it = max(int(np.max(read_chunk(folder, k, "ball_iterations"), initial=1)) for k in range(chunks))
+            assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, "newmark", chunks, modes,
+                     CHUNK_FIELDS, compression)
+            shutil.rmtree(folder, ignore_errors=True)
+    except (_Stop, KeyboardInterrupt) as e:
+        if bar is not None:
+            bar.close()
+        how = e.name if isinstance(e, _Stop) else (str(e) if str(e) in ("SIGINT", "SIGTERM") else "SIGINT")
+        if folder.is_dir() and not finished_chunks(folder):     # nothing worth keeping
+            shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
+            raise Interrupted(f"{how}: stopped before the first chunk finished; nothing written") from None
+        raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
+                          "the same command again to continue") from None
+    failed = lab["result"] != 0
+    codes, counts = np.unique(lab["result"][failed], return_counts=True)
+    return DatasetSummary(Path(path), n, T, int(failed.sum()), time.perf_counter() - t0,
+                          {int(c): int(k) for c, k in zip(codes, counts)}, str(dev), chunk)

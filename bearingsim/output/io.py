@@ -1,0 +1,315 @@
+"""Results files: JSON for single solves, HDF5 for sweeps, studies and simulations.
+
+Everything here is at the edge of the pipeline: the core hands over arrays in SI; this module
+converts to the documented output units and writes files atomically (temporary file in the
+same directory, then ``os.replace``), refusing to write NaN or infinity.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from .._version import __version__
+from ..case.units import from_si
+from ..errors import BearingsimError, OutputError
+
+
+class NonFiniteOutputError(OutputError):
+    """A result about to be written contains NaN or infinity (exit code 4)."""
+
+
+def _check_finite(name, arr):
+    a = np.asarray(arr)
+    if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+        raise NonFiniteOutputError(f"refusing to write {name}: it contains NaN or infinity")
+    return a
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path next to ``path``; move it into place only if the block succeeds.
+
+    A failure of the file system (``OSError``) is raised as :class:`~bearingsim.errors.OutputError`
+    naming ``path``; nothing is left behind either way."""
+    path = Path(path)
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes it owner-only; results are ordinary files
+        yield Path(tmp)
+        os.replace(tmp, path)
+    except BaseException as e:
+        if tmp is not None and os.path.exists(tmp):
+            os.remove(tmp)
+        if isinstance(e, OSError) and not isinstance(e, BearingsimError):
+            raise OutputError(f"cannot write {path}: {e.strerror or e}") from e
+        raise
+
+
+#: the ring displacement [x, y, axial, tilt_x, tilt_y] with the unit each is reported in
+RING_DOFS = (("x", "um"), ("y", "um"), ("axial", "um"), ("tilt_x", "mrad"), ("tilt_y", "mrad"))
+
+#: per-ball results of the static JSON: (JonesSolution field, unit); the key is "<field>_<unit>"
+STATIC_BALL_FIELDS = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer", "deg"), ("Q_inner", "N"),
+                      ("Q_outer", "N"), ("delta_inner", "um"), ("delta_outer", "um"), ("centrifugal", "N"),
+                      ("gyroscopic_moment", "Nm"), ("p_max_inner", "MPa"), ("p_max_outer", "MPa"),
+                      ("orbital_speed", "rpm"), ("spall_depth", "um"), ("spall_depth_inner", "um"))
+
+
+def assessment_to_dict(assessment) -> dict:
+    """The ``limits`` and ``life`` entries of the ``bearingsim static`` JSON (docs/results.md)."""
+    a = assessment
+    L = a.limits
+    st = a.settings
+    arr = lambda x: np.asarray(x)
+    deg = lambda x: from_si(np.asarray(x), "deg")
+    limits = {
+        "contact_pressure_limit_MPa": from_si(float(st["pressure_limit"]), "MPa"),
+        "friction_coefficient": float(st["friction_coefficient"]),
+        "max_pressure_ratio": float(L.max_pressure_ratio),
+        "max_friction_ratio": float(L.max_friction_ratio),
+        "min_edge_margin_deg": float(deg(L.min_edge_margin)),
+        "overpressure": bool(L.any_overpressure),
+        "slip": bool(L.any_slip),
+        "truncated": bool(L.any_truncated),
+        "over_shoulder": bool(L.any_over_shoulder),
+        "balls": {
+            "pressure_ratio_inner": arr(L.pressure_ratio_inner), "pressure_ratio_outer": arr(L.pressure_ratio_outer),
+            "friction_needed_inner": arr(L.friction_inner), "friction_needed_outer": arr(L.friction_outer),
+            "friction_ratio": arr(L.friction_ratio),
+            "edge_margin_high_inner_deg": deg(L.edge_high_inner), "edge_margin_low_inner_deg": deg(L.edge_low_inner),
+            "edge_margin_high_outer_deg": deg(L.edge_high_outer), "edge_margin_low_outer_deg": deg(L.edge_low_outer),
+            "truncated_inner": arr(L.truncated_inner).tolist(), "truncated_outer": arr(L.truncated_outer).tolist(),
+        },
+    }
+    life = None
+    if st["dynamic_load_rating"] is not None:
+        life = {
+            "dynamic_load_rating_kN": from_si(float(st["dynamic_load_rating"]), "kN"),
+            "nominal_contact_angle_deg": from_si(float(a.nominal_angle), "deg"),
+            "L10r_Mrev": a.rating_life,
+            "L10r_inner_Mrev": None if a.ring_lives is None else a.ring_lives[0],
+            "L10r_outer_Mrev": None if a.ring_lives is None else a.ring_lives[1],
+            "L10r_h": a.life_hours,
+        }
+    return {"limits": limits, "life": life}
+
+
+def static_to_dict(sol, bearing=None, assessment=None) -> dict:
+    """The fixed JSON interface of ``bearingsim static`` (units in the key names; stiffness SI);
+    with ``assessment`` (:func:`bearingsim.app.workflows.assess_case`) also ``limits`` and ``life``."""
+    q = np.asarray(sol.displacement)
+    d = {
+        "converged": bool(int(sol.result) == 0),
+        "result": int(sol.result),
+        "message": sol.message()[0],
+        "iterations": int(sol.iterations),
+        "residual_norm": float(sol.residual_norm),
+        "residual_norm_units": "N (moments divided by R_i)",
+        "ring_displacement": {f"{name}_{unit}": from_si(v, unit) for (name, unit), v in zip(RING_DOFS, q)},
+        "cage_speed_rpm": from_si(float(sol.cage_speed), "rpm"),
+        "loads": dict(zip(["radial_x_N", "radial_y_N", "axial_N", "moment_x_Nm", "moment_y_Nm"],
+                          np.asarray(sol.loads).tolist())),
+        "balls": {f"{field}_{unit}": from_si(np.asarray(getattr(sol, field)), unit)
+                  for field, unit in STATIC_BALL_FIELDS},
+        "stiffness": {
+            "dofs": ["x", "y", "axial", "tilt_x", "tilt_y"],
+            "units": "N/m (force/translation), N/rad (force/tilt), N m/m (moment/translation), "
+                     "N m/rad (moment/tilt); row = load, column = displacement",
+            "matrix": np.asarray(sol.stiffness),
+        },
+    }
+    if assessment is not None:
+        d.update(assessment_to_dict(assessment))
+    return _to_jsonable(d, "static")
+
+
+def _to_jsonable(obj, name):
+    if isinstance(obj, dict):
+        return {k: _to_jsonable(v, f"{name}.{k}") for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_to_jsonable(v, name) for v in obj]
+    if isinstance(obj, (np.ndarray, np.generic)) or hasattr(obj, "__array__"):
+        a = _check_finite(name, obj)
+        return a.tolist()
+    if isinstance(obj, float) and not np.isfinite(obj):
+        raise NonFiniteOutputError(f"refusing to write {name}: it is {obj}")
+    return obj
+
+
+def write_json(path, data: dict):
+    """Write ``data`` (dicts, lists, numbers, arrays) as JSON atomically; refuses NaN and infinity."""
+    data = _to_jsonable(data, Path(path).name)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(data, indent=2) + "\n")
+
+
+def write_h5(path, groups: dict, attrs: dict | None = None):
+    """Write ``{group: {name: (array, units, extra_attrs_or_None)}}`` to HDF5 atomically.
+
+    Root attributes ``bearingsim_version`` and whatever ``attrs`` holds (e.g. ``case_toml``);
+    group attributes under the key ``"@attrs"``.  Every dataset gets a ``units`` attribute.
+    """
+    import h5py
+
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["bearingsim_version"] = __version__
+            for k, v in (attrs or {}).items():
+                f.attrs[k] = v
+            for gname, items in groups.items():
+                g = f.require_group(gname)
+                for name, spec in items.items():
+                    if name == "@attrs":
+                        for ak, av in spec.items():
+                            g.attrs[ak] = av
+                        continue
+                    arr, units = spec[0], spec[1]
+                    a = _check_finite(f"/{gname}/{name}", arr)
+                    ds = g.create_dataset(name, data=a, compression="gzip" if a.size > 4096 else None)
+                    ds.attrs["units"] = units
+                    if len(spec) > 2 and spec[2]:
+                        for ak, av in spec[2].items():
+                            ds.attrs[ak] = av
+
+
+STIFFNESS_UNITS = ("N/m, N/rad, N m/m, N m/rad: row = load [Fx, Fy, Fz, Mx, My], "
+                   "column = displacement [x, y, axial, tilt_x, tilt_y]")
+
+# name in the results file -> (JonesSolution field, units)
+_STATE_FIELDS = {
+    "cage_angle": ("cage_angle", "rad"),
+    "azimuth": ("azimuth", "rad"),
+    "alpha_inner": ("alpha_inner", "rad"),
+    "alpha_outer": ("alpha_outer", "rad"),
+    "Q_inner": ("Q_inner", "N"),
+    "Q_outer": ("Q_outer", "N"),
+    "delta_inner": ("delta_inner", "m"),
+    "delta_outer": ("delta_outer", "m"),
+    "centrifugal": ("centrifugal", "N"),
+    "gyroscopic_moment": ("gyroscopic_moment", "N m"),
+    "orbital_speed": ("orbital_speed", "rad/s"),
+    "spall_depth": ("spall_depth", "m"),
+    "spall_depth_inner": ("spall_depth_inner", "m"),
+    "p_max_inner": ("p_max_inner", "Pa"),
+    "p_max_outer": ("p_max_outer", "Pa"),
+    "ring_displacement": ("displacement", "x, y, axial in m; tilt_x, tilt_y in rad"),
+    "stiffness": ("stiffness", STIFFNESS_UNITS),
+    "iterations": ("iterations", "1"),
+    "residual_norm": ("residual_norm", "N (moments divided by R_i)"),
+    "result": ("result", "1 (0 = converged; see bearingsim.RESULTS)"),
+}
+
+
+def state_datasets(sol):
+    """Datasets of a batch of quasi-static states (sweep: leading (N,), study: (M, N)).
+
+    States that did not converge are flagged in ``converged`` and their values set to 0 (never
+    NaN in a results file)."""
+    ok = np.asarray(sol.result) == 0
+    out = {"converged": (ok, "bool (True where the solve converged)")}
+    for name, (field, units) in _STATE_FIELDS.items():
+        a = np.asarray(getattr(sol, field))
+        if a.dtype.kind == "f":
+            mask = ok.reshape(ok.shape + (1,) * (a.ndim - ok.ndim))
+            a = np.where(mask & np.isfinite(a), a, 0.0) if not np.all(ok) else a
+        out[name] = (a, units)
+    return out
+
+
+# ----------------------------------------------------------------------------- results files
+def case_attrs(case) -> dict:
+    """Root attributes of every results file written for a case: its TOML and title."""
+    return {"case_toml": case.text, "title": case.title}
+
+
+def write_static(path, sol, assessment=None):
+    """The JSON of ``bearingsim static`` (:func:`static_to_dict`)."""
+    write_json(path, static_to_dict(sol, assessment=assessment))
+
+
+def write_sweep(path, case, sol):
+    """The HDF5 of ``bearingsim sweep``: group ``/sweep`` (:func:`state_datasets`)."""
+    write_h5(path, {"sweep": state_datasets(sol)}, attrs=case_attrs(case))
+
+
+def write_study(path, case, study):
+    """The HDF5 of ``bearingsim study``: group ``/study`` with (M, N) states, ``values`` (in the
+    key's unit) and the attribute ``parameter``."""
+    ds = state_datasets(study.solution)
+    ds["values"] = (np.asarray(study.values, dtype=float), study.unit or "1")
+    ds["@attrs"] = {"parameter": study.parameter}
+    write_h5(path, {"study": ds}, attrs=case_attrs(case))
+
+
+def simulation_datasets(res, balls):
+    """The fixed ``/dynamics`` layout of ``bearingsim simulate`` (SI)."""
+    attrs = dict(res.frequencies)
+    attrs.update(
+        contact_angle_rad=float(res.contact_angle),
+        frequency_note=("ftf = quasi-static cage speed / 2 pi, bpfo = Z ftf; bpfi and bsf (once per "
+                        "ball revolution) from MODEL.md section 8 at the mean loaded contact angle "
+                        "contact_angle_rad"),
+        result=int(res.result), num_steps=int(res.num_steps), balls=int(balls),
+        ball_iterations=int(res.ball_iterations),
+        contact_damping_Ns_per_m=np.asarray(res.contact_damping))
+    return {
+        "time": (np.asarray(res.time), "s"),
+        "cage_angle": (np.asarray(res.cage_angle), "rad"),
+        "ring_displacement": (np.asarray(res.ring_displacement), "m (shaft relative to housing: x, y, axial)"),
+        "housing_displacement": (np.asarray(res.housing_displacement), "m (x, y)"),
+        "housing_acceleration": (np.asarray(res.housing_acceleration), "m/s^2 (x, y)"),
+        "sensor_acceleration": (np.asarray(res.sensor_acceleration), "m/s^2"),
+        "Q_inner": (np.asarray(res.Q_inner), "N"),
+        "Q_outer": (np.asarray(res.Q_outer), "N"),
+        "alpha_inner": (np.asarray(res.alpha_inner), "rad"),
+        "alpha_outer": (np.asarray(res.alpha_outer), "rad"),
+        "spall_edge_times": (np.asarray(res.jump_times, float), "s"),
+        "spall_pass_times": (np.asarray(res.pass_times, float), "s"),
+        "@attrs": attrs,
+    }
+
+
+def write_simulation(path, case, res):
+    """The HDF5 of ``bearingsim simulate``: group ``/dynamics`` (:func:`simulation_datasets`)."""
+    write_h5(path, {"dynamics": simulation_datasets(res, case.bearing().n_balls)}, attrs=case_attrs(case))
+
+
+_FREQUENCIES = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
+
+
+def read_simulation(path) -> dict:
+    """Read back a ``bearingsim simulate`` file: dict(time, sensor_acceleration, frequencies
+    {shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz}, case: the stored Case or None).  Raises
+    :class:`~bearingsim.errors.InputError` for anything else."""
+    import h5py
+
+    from ..case import CaseError, parse_case
+    from ..errors import InputError
+
+    if Path(path).is_dir():
+        raise InputError(f"{path}: is a directory, not a bearingsim simulate output")
+    try:
+        with h5py.File(path, "r") as f:
+            g = f["dynamics"]
+            out = {"time": g["time"][()], "sensor_acceleration": g["sensor_acceleration"][()],
+                   "frequencies": {k: float(g.attrs[k]) for k in _FREQUENCIES}}
+            toml = f.attrs.get("case_toml", "")
+    except (OSError, KeyError) as e:
+        raise InputError(f"{path}: not a bearingsim simulate output ({e})") from None
+    if out["time"].size < 2:
+        raise InputError(f"{path}: /dynamics/time has {out['time'].size} samples; need at least 2")
+    try:
+        out["case"] = parse_case(toml, source=f"{path}:case_toml") if toml else None
+    except CaseError:
+        out["case"] = None
+    return out
