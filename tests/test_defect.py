@@ -282,7 +282,9 @@ def test_ball_pit_at_rest_closed_form(b218):
         tot_h = np.asarray(h.delta_inner + h.delta_outer)
         tot_s = np.asarray(s.delta_inner + s.delta_outer)
         assert tot_s[3] == pytest.approx(tot_h[3] - Hb, abs=1e-15)      # round-off of ~1e-4 m lengths
-        np.testing.assert_array_equal(np.delete(tot_s, 3), np.delete(tot_h, 3))
+        # the other balls: untouched up to the rounding of another compiled path (zero depths
+        # subtracted; bitwise equal at XLA's default optimisation, ~30 ulp apart at -O0)
+        np.testing.assert_allclose(np.delete(tot_s, 3), np.delete(tot_h, 3), rtol=1e-13, atol=0)
         # same ball centre: the pit takes exactly H_b off the contact it is in
         from bearingsim.physics.balls import groove_centre_offsets
         A1, A2 = groove_centre_offsets(b218, q, psi)
