@@ -16,6 +16,28 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 DEG = np.pi / 180
 
+
+def pytest_configure(config):
+    """One bank cache for the whole session, made by the controller before the xdist workers
+    start (they and the notebooks' kernels inherit the variable): an identification bank that
+    tests/test_identify.py builds is read by notebook 09, and never a bank of an earlier run.
+    A ``BEARINGSIM_CACHE`` the caller set is kept."""
+    if hasattr(config, "workerinput") or os.environ.get("BEARINGSIM_CACHE"):
+        return
+    import tempfile
+
+    config._bearingsim_cache = tempfile.mkdtemp(prefix="bearingsim-test-cache-")
+    os.environ["BEARINGSIM_CACHE"] = config._bearingsim_cache
+
+
+def pytest_unconfigure(config):
+    d = getattr(config, "_bearingsim_cache", None)
+    if d:
+        import shutil
+
+        shutil.rmtree(d, ignore_errors=True)
+        os.environ.pop("BEARINGSIM_CACHE", None)
+
 # Longest first (make test: pytest-xdist, one file per worker at a time, `--dist loadfile
 # --no-loadscope-reorder`): the files below go to the workers first, heaviest first, so the two
 # workers finish together instead of one of them running notebook 02 or test_identify alone at the

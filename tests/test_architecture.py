@@ -144,7 +144,10 @@ def test_nothing_uses_an_old_path():
                     or p == PACKAGE / "__init__.py":
                 continue
             for k, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
-                if old.search(line):
+                names = re.search(r"from bearingsim import ([\w ,]+)", line)        # from bearingsim import jones
+                names = {n.strip().split(" ")[0] for n in names.group(1).split(",")} if names else set()
+                alias = re.search(r"\bbs\.(\w+)\.", line)                           # bs.jones.solve
+                if old.search(line) or names & set(MOVED) or (alias and alias.group(1) in MOVED):
                     bad.append(f"{p.relative_to(ROOT)}:{k}: {line.strip()[:100]}")
     assert not bad, "old module paths:\n" + "\n".join(bad)
 

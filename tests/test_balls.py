@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
+from bearingsim.physics import hertz, jones
 from bearingsim.physics import balls
 from bearingsim.physics.hertz import stiffness_curve
 from conftest import DEG
@@ -121,14 +122,14 @@ def _light_ball_sweep(lens, monkeypatch):
     b = c.bearing()
     op = bs.Operation.from_rpm(1797.0, "outer", True, True)
     curve = stiffness_curve(b)
-    q = bs.solve(b, op, bs.jones.load_vector(axial=27.0, radial_x=184.0)).displacement
+    q = bs.solve(b, op, jones.load_vector(axial=27.0, radial_x=184.0)).displacement
     j = 6
     psi = b.ball_azimuths(np.pi / 9.0)
     A1, A2 = balls.groove_centre_offsets(b, q, psi)
     L0 = float(jnp.hypot(A1[j], A2[j]))
     _, d_c = balls.static_ball_position(b, op, A1, A2, curve)
     d_c = float(d_c[j])
-    K_i, K_o = (float(bs.hertz.power_eval(p, jnp.cos(0.1))) for p in (curve.inner_power, curve.outer_power))
+    K_i, K_o = (float(hertz.power_eval(p, jnp.cos(0.1))) for p in (curve.inner_power, curve.outer_power))
     share_o = 1.0 / (1.0 + (K_o / K_i) ** (2.0 / 3.0))
     gap = np.linspace(-12.0 * d_c, 3.0 * d_c / share_o, 61)
     Hi = np.zeros((gap.size, 9))

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import bearingsim as bs
+from bearingsim.physics import balls, hertz
 from bearingsim import dynamics as dyn
 from bearingsim.case import load_case, parse_case
 from bearingsim.dynamics.ball_force import ITER_TOL
@@ -31,7 +32,7 @@ def trajectory(request):
     b, op, F, sp = c.bearing(), c.operation(), c.loads(), c.spall()
     p = dyn.DynamicsParameters.from_settings(c.dynamics_settings())
     r = dyn.simulate(b, op, F, sp, p, 0.04, 48000.0, theta0=c.cage_angle, progress=False, ball_solver="full")
-    model = dyn.build_model(b, op, F, (sp,), r.quasi_static, p, bs.hertz.stiffness_curve(b), r.ball_iterations,
+    model = dyn.build_model(b, op, F, (sp,), r.quasi_static, p, hertz.stiffness_curve(b), r.ball_iterations,
                             r.spin_ratio)
     stage = np.stack([r.cage_angle, r.shaft_angle, r.shaft_speed], -1)
     # sample k's state is reached by step k - 1: its edge flag is that step's
@@ -96,16 +97,16 @@ def test_ball_balance_is_ball_state():
     contact directions of balls.ball_state to round-off, dropped and carried balls included."""
     c = load_case("cwru_6205")
     b, op = c.bearing(), c.operation()
-    curve = bs.hertz.stiffness_curve(b)
+    curve = hertz.stiffness_curve(b)
     q = bs.solve(b, op, c.loads(), spall=c.spall()).displacement
-    A1, A2 = bs.balls.groove_centre_offsets(b, q, b.ball_azimuths(0.3))
-    x0, _ = bs.balls.static_ball_position(b, op, A1, A2, curve)
+    A1, A2 = balls.groove_centre_offsets(b, q, b.ball_azimuths(0.3))
+    x0, _ = balls.static_ball_position(b, op, A1, A2, curve)
     rng = np.random.default_rng(0)
     X = x0 + rng.normal(0.0, 2e-7, x0.shape)
     Ho = jnp.asarray(rng.uniform(0.0, 3e-6, 9) * (rng.uniform(size=9) > 0.5))
     ws = jnp.full(9, 80.0)
-    r1, r2, G, H, rec = bs.balls.ball_balance(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
-    st = bs.balls.ball_state(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
+    r1, r2, G, H, rec = balls.ball_balance(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
+    st = balls.ball_state(b, op, (X[0], X[1]), A1, A2, curve, Ho, 0.0 * Ho, ws)
     scale = float(jnp.max(st.Q_outer))
     for got, want in ((r1, st.r_axial), (r2, st.r_radial), (G, st.ball_G), (H, st.ball_H), (rec[0], st.Q_inner),
                       (rec[1], st.Q_outer)):
@@ -140,4 +141,4 @@ def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
         assert threads, f"{name} was not compiled at all: {compiles}"
         assert all(t == "bearingsim-precompile" for t in threads), (name, threads)
     # a second configuration already compiled: no thread
-    assert dyn.precompile_ball_check(b, op, (sp,), bs.hertz.stiffness_curve(b), c.cage_angle) is None
+    assert dyn.precompile_ball_check(b, op, (sp,), hertz.stiffness_curve(b), c.cage_angle) is None

@@ -7,6 +7,7 @@ import pytest
 import scipy.signal as ss
 
 import bearingsim as bs
+from bearingsim.physics import hertz
 from bearingsim import dynamics as dyn
 from bearingsim.signals import sensor
 from bearingsim.case import load_case, parse_case
@@ -220,7 +221,7 @@ def test_realism_is_seeded_and_labelled(cwru):
 def test_lean_ball_solver_accuracy(cwru):
     c, b, op, F, sp = cwru
     sol = bs.solve(b, op, F, cage_angle=0.0, spall=sp)
-    curve = bs.hertz.stiffness_curve(b)
+    curve = hertz.stiffness_curve(b)
     n, err = dyn.choose_ball_iterations(b, op, sol.displacement, sp, curve)
     assert n == 1 and err <= 1e-3
     n, err = dyn.choose_ball_iterations(b, op, sol.displacement, sp, curve, tol=1e-9)
@@ -237,7 +238,7 @@ def test_converged_lean_solve_is_the_exact_ball_state(name):
     import jax.numpy as jnp
     c = load_case(name)
     b, op, F, sp = c.bearing(), c.operation(), c.loads(), c.spall()
-    curve = bs.hertz.stiffness_curve(b)
+    curve = hertz.stiffness_curve(b)
     q = bs.solve(b, op, F, cage_angle=c.cage_angle, spall=sp).displacement
 
     @jit
@@ -267,7 +268,7 @@ def test_ball_records_of_the_time_loop_equal_a_separate_solve(cwru_run):
     n = 2400                                                   # 50 ms with four spall passes
     model = dyn.build_model(b, c.operation(), c.loads(), (c.spall(),), r.quasi_static,
                             dyn.DynamicsParameters.from_settings(c.dynamics_settings()),
-                            bs.hertz.stiffness_curve(b), r.ball_iterations, r.spin_ratio)
+                            hertz.stiffness_curve(b), r.ball_iterations, r.spin_ratio)
     ref = sim.ball_records(model, r.ring_displacement[:n], r.cage_angle[:n], r.shaft_angle[:n],
                            r.shaft_speed[:n], r.ball_iterations + 1)
     scale = float(np.max(ref[1]))

@@ -142,8 +142,8 @@ def bank(tmp_path_factory):
     pytest.importorskip("sklearn")
     from bearingsim.realism.identify import build_bank
 
-    d = tmp_path_factory.mktemp("bank")
-    return build_bank(d / "bank.h5", count=160, seed=7101, progress=False)
+    # the bank cache of this test session (tests/conftest.py): notebook 09 reads the same bank
+    return build_bank(count=160, seed=7101, progress=False)
 
 
 @pytest.fixture(scope="module")

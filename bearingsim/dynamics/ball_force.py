@@ -109,7 +109,12 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, ja
 
     lin0 = (zero, zero)
     init = (X1, X2, lin0, lin0, lin0, zero, zero) + ((zero,) * 4 if jacobian else ())
-    n = max(int(iterations), 1)
+    if isinstance(iterations, (int, np.integer)):
+        n = max(int(iterations), 1)
+    else:           # a traced count (one program for every count: the data engine's time loop)
+        if record:
+            raise ValueError("a recorded ball solve needs a Python int count of Newton steps")
+        n = jnp.maximum(jnp.asarray(iterations, jnp.int32), 1)
     if record:
         c, hist = lax.scan(newton, init, None, length=n)
     else:

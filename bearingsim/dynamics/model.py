@@ -70,6 +70,13 @@ class DynamicModel(eqx.Module):
     spin_ratio: jnp.ndarray     # omega_R / omega (-)
     params: DynamicsParameters
     iterations: int = eqx.field(static=True, default=1)
+    #: a traced Newton step count in place of ``iterations`` (None: ``iterations``): the data
+    #: engine compiles one time loop for every count of its menu
+    iteration_count: jnp.ndarray | None = None
+
+    @property
+    def newton_steps(self):
+        return self.iterations if self.iteration_count is None else self.iteration_count
 
     def depths(self, psi, phi):
         """(H_outer, H_inner) per ball at azimuths psi and shaft angle phi (None, None: healthy)."""
@@ -88,7 +95,7 @@ class DynamicModel(eqx.Module):
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, record=full_state,
+        out = bearing_force(self.bearing, op, self.curve, q, psi, Ho, Hi, self.newton_steps, record=full_state,
                             even_azimuths=True)
         return (out[0], out[1]) if full_state else out[0]
 
@@ -101,7 +108,7 @@ class DynamicModel(eqx.Module):
         q = jnp.concatenate([xrel, self.tilts])
         op = eqx.tree_at(lambda o: o.speed, self.op, omega)
         Ho, Hi = self.depths(psi, phi)
-        return bearing_force_chord(self.bearing, op, self.curve, q, psi, Ho, Hi, self.iterations, carry, refresh)
+        return bearing_force_chord(self.bearing, op, self.curve, q, psi, Ho, Hi, self.newton_steps, carry, refresh)
 
     def masses(self):
         """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
@@ -170,7 +177,8 @@ def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, cu
     loads = jnp.asarray(loads, jnp.float64)
     return DynamicModel(bearing, op, tuple(defects), curve, loads, q[..., 3:5], cb, Kt,
                         jnp.asarray(spin_ratio, jnp.float64) + jnp.zeros(jnp.shape(q)[:-1]),
-                        params, int(iterations))
+                        params, *((int(iterations), None) if isinstance(iterations, (int, np.integer))
+                                  else (1, jnp.asarray(iterations, jnp.int32))))
 
 
 def initial_state(model: DynamicModel, q_rel0, stage0):

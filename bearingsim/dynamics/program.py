@@ -11,7 +11,8 @@ and without a host round trip inside the record:
    over a ball pitch plus a ball over the item's defect, the ring displaced +-5 %).
 2. The host reads one integer: the smallest count of :data:`MENU` that meets
    :data:`ITER_TOL` for every item of the chunk (an explicit ``jax.device_get`` of a scalar).
-3. ``run[count]`` (one program per count of the menu, compiled when first needed): per item the
+3. ``run`` (one program for every count of the menu: the count is a traced integer, the bound
+   of the ball solver's Newton loop): per item the
    motion from its key (:func:`bearingsim.dynamics.draw_motion_device`), the defect edge and
    pass times as padded arrays, the model's equilibrium at t = 0, the sensor filter of its own
    modes, and the whole record's time loop (one ``lax.scan`` over the samples; the stage and
@@ -47,7 +48,7 @@ from .parameters import RESULTS, Realism
 __all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
            "frequencies_device"]
 
-#: the Newton step counts a chunk's time loop is compiled with (one program each, when first used)
+#: the Newton step counts a chunk's time loop may run (data to one compiled program)
 MENU = (1, 2, 4, 8, 16)
 
 
@@ -240,8 +241,8 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
     for k_ in ("pit_depth", "unbridged", "pit_ok"):
         out[k_] = prep[k_]
     out["spin_ratio"] = prep["spin_ratio"]
-    out["ball_error"] = jnp.take_along_axis(prep["ball_errors"], jnp.full((keys.shape[0], 1),
-                                            ITER_CHOICES.index(iterations)), axis=1)[:, 0]
+    column = jnp.argmax(jnp.asarray(ITER_CHOICES) == iterations)      # iterations: a count of MENU
+    out["ball_error"] = jnp.take_along_axis(prep["ball_errors"], jnp.full((keys.shape[0], 1), column), axis=1)[:, 0]
     return out
 
 
@@ -287,7 +288,9 @@ class ChunkProgram:
 
     def run(self, prep, keys, loads, theta0, modes, params, iterations):
         self.calls += 1
-        return _run_jit(self.bearing, self.curve, prep, keys, loads, theta0, modes, params, int(iterations),
+        # the count is data (a traced int32): one compiled time loop serves every count of MENU
+        return _run_jit(self.bearing, self.curve, prep, keys, loads, theta0, modes, params,
+                        jax.device_put(np.int32(int(iterations))),
                         self.substeps, self.T, self.fs, self.scheme, self.realism, self.n_knots, self.P,
                         self.profile)
 

@@ -87,14 +87,46 @@ def bank_name(count, seed) -> str:
 
 
 def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Path:
-    """Simulate the bank (``count`` items, ``seed``) into ``path`` (HDF5) unless it is there."""
+    """Simulate the bank (``count`` items, ``seed``) into ``path`` (HDF5; None: the bank cache,
+    :func:`cache_dir`) unless it is there.  Processes that need the same bank at once (test
+    workers, notebooks, two shells) build it once: the others wait on a lock file beside it and
+    then read it."""
     from ..datasets import make_dataset
 
     path = Path(path) if path is not None else cache_dir() / bank_name(count, seed)
-    if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        make_dataset(bank_spec(count, seed), path, progress=progress)
+    if path.exists():
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with _exclusive(path.with_name(path.name + ".lock")):
+        if not path.exists():
+            make_dataset(bank_spec(count, seed), path, progress=progress)
     return path
+
+
+class _exclusive:
+    """An exclusive lock on ``path`` (``fcntl.flock``: released when the holder exits, even by a
+    crash); where the platform has no ``fcntl``, no lock (the bank file is written atomically, so
+    two builders only waste time)."""
+
+    def __init__(self, path):
+        self.path, self.fd = Path(path), None
+
+    def __enter__(self):
+        try:
+            import fcntl
+        except ImportError:         # Windows
+            return self
+        self.fd = os.open(self.path, os.O_CREAT | os.O_RDWR, 0o644)
+        fcntl.flock(self.fd, fcntl.LOCK_EX)
+        return self
+
+    def __exit__(self, *exc):
+        if self.fd is not None:
+            import fcntl
+
+            fcntl.flock(self.fd, fcntl.LOCK_UN)
+            os.close(self.fd)
+        return False
 
 
 def measured_shaft_speed(x, fs, nominal_hz) -> float:
