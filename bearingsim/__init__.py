@@ -35,6 +35,7 @@ _runtime.configure()        # float64 and the persistent compilation cache, befo
 
 from ._version import __version__  # noqa: E402
 from . import moved as _moved  # noqa: E402
+from .names import lazy_exports as _lazy_exports  # noqa: E402
 
 _moved.install()            # the paths before the folders (bearingsim.jones, ...), deprecated
 
@@ -63,24 +64,18 @@ _EXPORTS = {
     "datasets.mldata": ("load_dataset", "WindowDataset"),
     "realism.identify": ("identify",),
 }
-_WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
 
 
-def __getattr__(name):
+def _moved_module(name):
+    """``bearingsim.jones`` and the other paths before the folders: deprecated (bearingsim.moved)."""
+    if _moved.new_path(f"{__name__}.{name}") is None:
+        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
     import importlib
 
-    mod = _WHERE.get(name)
-    if mod is None:
-        if _moved.new_path(f"{__name__}.{name}") is not None:    # bearingsim.jones: deprecated
-            return importlib.import_module(f".{name}", __name__)
-        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{mod}", __name__), name)
-    globals()[name] = value
-    return value
+    return importlib.import_module(f".{name}", __name__)
 
 
-def __dir__():
-    return sorted(set(globals()) | set(_WHERE))
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS, _moved_module)
 
 
 __all__ = [

@@ -46,10 +46,13 @@ class _Alias(importlib.abc.Loader):
     def create_module(self, spec):
         warnings.warn(f"{spec.name} moved to {self.target}; import it from there "
                       "(the old path goes in a later release)", DeprecationWarning, stacklevel=2)
-        return importlib.import_module(self.target)
+        module = importlib.import_module(self.target)
+        self.own_spec = module.__spec__
+        return module
 
     def exec_module(self, module):
-        pass
+        # the import system gave the module the old path's spec: it keeps its own
+        module.__spec__ = self.own_spec
 
 
 class _MovedFinder(importlib.abc.MetaPathFinder):

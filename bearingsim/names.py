@@ -7,7 +7,7 @@ LOCATIONS`` (``bearingsim.datasets.CLASSES``)."""
 #: where a localized defect can be: a spall on the outer or the inner raceway, a pit on a ball
 LOCATIONS = ("outer", "inner", "ball")
 
-__all__ = ["LOCATIONS", "noun_module"]
+__all__ = ["LOCATIONS", "noun_module", "lazy_exports"]
 
 
 def noun_module(module_name: str, noun: str):
@@ -29,3 +29,29 @@ def noun_module(module_name: str, noun: str):
     NounModule.__module__ = module_name
     module.__class__ = NounModule
     return module
+
+
+def lazy_exports(package: str, table: dict, missing=None):
+    """``(__getattr__, __dir__)`` for a package whose public names are imported at first use
+    (PEP 562): ``table`` maps a submodule (relative dotted name) to the names it offers.  A name
+    found is kept in the package's namespace (the next access is a plain lookup); ``missing(name)``
+    answers a name the table does not hold (or raises ``AttributeError``)."""
+    import importlib
+    import sys
+
+    where = {name: mod for mod, names in table.items() for name in names}
+
+    def __getattr__(name):
+        mod = where.get(name)
+        if mod is None:
+            if missing is not None:
+                return missing(name)
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(f".{mod}", package), name)
+        vars(sys.modules[package])[name] = value
+        return value
+
+    def __dir__():
+        return sorted(set(vars(sys.modules[package])) | set(where))
+
+    return __getattr__, __dir__

@@ -40,6 +40,8 @@ Items whose simulation failed keep a zero signal and a result code != 0
 """
 from __future__ import annotations
 
+from ..names import lazy_exports
+
 #: every public name of the data set modules, by module: imported at first use (PEP 562), so that
 #: ``bearingsim.datasets.mldata`` (NumPy and h5py only) does not load JAX through this package
 _EXPORTS = {
@@ -48,22 +50,7 @@ _EXPORTS = {
     'spec': ('CLASSES', 'FIELD_STREAMS', 'LABEL_DTYPE', 'LABEL_FIELDS', 'RANGES', 'SPLITS', 'DatasetResult', 'DatasetSummary', 'class_counts', 'class_of_index', 'defect_geometry', 'draw_labels', 'item_keys', 'item_locations', 'item_seeds', 'result_messages', 'settings', 'simulation_order', 'slots_of', 'transfer_paths'),
     'writer': ('CHUNK_FORMAT', 'COMPRESSIONS', 'DEFAULT_COMPRESSION', 'partial_path'),
 }
-_WHERE = {name: mod for mod, names in _EXPORTS.items() for name in names}
-
-
-def __getattr__(name):
-    mod = _WHERE.get(name)
-    if mod is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(f".{mod}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_WHERE))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 
 __all__ = ["ChunkPlan", "CHUNK_FIELDS", "BACKGROUND_FIELDS", "simulate_chunk", "device_program", "plan_program",
