@@ -115,7 +115,7 @@ def _contact_limits_jit():
     global _LIMITS_JIT
     if _LIMITS_JIT is None:
         from ..physics.limits import contact_limits
-        from ..xla import jit
+        from ..programs import jit
 
         _LIMITS_JIT = jit(contact_limits)
     return _LIMITS_JIT

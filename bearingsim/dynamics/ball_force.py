@@ -28,7 +28,7 @@ from ..physics.balls import (ball_balance, ball_state, contact_record, groove_ce
 from ..physics.defect import advance, as_defects, contact_depths
 from ..fastmath import norm2, recip
 from ..physics.kinematics import Operation, ball_kinematics_cs
-from ..xla import jit
+from ..programs import jit
 
 __all__ = ["bearing_force", "BallCarry", "initial_ball_carry", "bearing_force_chord", "CHORD_TOL", "bearing_force_history", "RECORD_ROWS", "record_loads_angles", "ball_errors", "choose_ball_iterations", "precompile_ball_check",
            "next_iterations", "ITER_CHOICES", "ITER_TOL", "REF_ITERATIONS", "REF_TOL"]

@@ -21,7 +21,7 @@ from ..physics.hertz import stiffness_curve
 from ..physics.jones import solve, solve_state
 from ..physics.kinematics import Operation
 from ..physics.newton import converged_only, retry_failed
-from ..xla import jit
+from ..programs import jit
 from .ball_force import ITER_CHOICES, choose_ball_iterations, next_iterations
 from .integrate import check_scheme, run_fixed, time_grid
 from .model import build_model, choose_substeps, initial_state, linear_modes

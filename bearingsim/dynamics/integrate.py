@@ -33,7 +33,8 @@ from jax import lax
 
 from ..signals import sensor as sensor_mod
 from ..errors import InputError
-from ..xla import compiler_options, jit
+from ..programs import jit
+from ..xla import compiler_options
 from .ball_force import initial_ball_carry
 from .model import DynamicModel
 from .motion import Motion, device_motion_of, motion_at, motion_at_device

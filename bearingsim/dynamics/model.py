@@ -39,7 +39,7 @@ from jax import lax
 
 from ..physics.defect import advance, contact_depths
 from ..physics.kinematics import Operation
-from ..xla import jit
+from ..programs import jit
 from .ball_force import RECORD_ROWS, BallCarry, bearing_force, bearing_force_chord
 from .parameters import DynamicsParameters
 

@@ -37,7 +37,7 @@ from ..physics.jones import solve_state
 from ..keys import item_keys
 from ..physics.kinematics import Operation, defect_frequencies
 from ..physics.pit import pit_of_solution_device
-from ..xla import jit
+from ..programs import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
 from .integrate import advance_record, check_scheme, jumps_device, stages_device
 from .model import build_model, initial_state

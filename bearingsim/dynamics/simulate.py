@@ -23,7 +23,7 @@ from ..physics.jones import result_hint, solve
 from ..physics.kinematics import Operation, defect_frequencies
 from ..signals.passes import pass_variation
 from ..physics.pit import pit_unbridged_fraction
-from ..xla import jit
+from ..programs import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes

@@ -16,7 +16,7 @@ import jax.numpy as jnp
 from jax import lax
 
 from ..fastmath import clamp
-from ..xla import jit
+from ..programs import jit
 
 _AGM_STEPS = 12      # m <= 1 - 1e-8 converges to 1 ulp in <= 7 steps
 _KAPPA_NEWTON = 8    # Brewe-Hamrock start is within ~3 %; Newton is quadratic

@@ -52,7 +52,7 @@ from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed,
                      step_status, traced_tolerances)
-from ..xla import jit
+from ..programs import jit
 
 __all__ = [
     "RESULTS",

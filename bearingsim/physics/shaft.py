@@ -58,7 +58,7 @@ from .jones import RESULTS, JonesSolution, initial_displacement, raise_for, stat
 from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, step_status,
                      traced_tolerances)
-from ..xla import jit
+from ..programs import jit
 
 __all__ = [
     "BearingSet",

@@ -30,7 +30,7 @@ from .defect import Spall, as_defects, canonical_defects, contact_depths
 from .jones import JonesSolution, raise_for, solve, solve_state
 from ..names import noun_module
 from .newton import retry_failed, traced_tolerances
-from ..xla import jit
+from ..programs import jit
 
 __all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "defect_occupancy", "representatives",
            "sweep", "sweep_chunked", "defect_centre_edges", "defect_angles", "sweep_defect_angle"]

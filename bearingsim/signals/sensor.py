@@ -36,7 +36,7 @@ import numpy as np
 import scipy.linalg
 from jax import lax
 
-from ..xla import jit
+from ..programs import jit
 
 __all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
            "apply_sensor", "apply_sensor_batch", "measurement_noise", "G", "sensor_filter_device"]

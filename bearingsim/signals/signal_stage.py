@@ -50,7 +50,7 @@ from . import nuisance as _nuisance
 from .background import BACKGROUND_DEFAULTS, Background
 from ..keys import item_keys, stream_key
 from .sensor import SensorFilter, filter_init, filter_output, filter_update
-from ..xla import jit
+from ..programs import jit
 
 __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_keys", "stream_key",
            "draw_items", "draw_background", "background_draws", "background_record", "synthesize_background",

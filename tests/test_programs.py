@@ -1,0 +1,112 @@
+"""The program cache (bearingsim.programs): a warm process loads a traced program instead of
+tracing it, the key tells every static configuration apart, and a bad file is traced again."""
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from bearingsim import programs
+from bearingsim.programs import jit
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+class Scale(eqx.Module):
+    gain: jax.Array
+    mode: str = eqx.field(static=True)
+
+
+def _f(x, s: Scale, power, flag=True):
+    y = s.gain * x ** power
+    return {"y": y if flag else -y, "mode": s.mode, "n": power}
+
+
+def test_kept_program_equals_the_function_and_tells_statics_apart(tmp_path, monkeypatch):
+    """Every static value is part of the key: another power, flag, static field or shape gives
+    another program (and the right answer), never a neighbour's (the collision that sank the
+    last attempt: a program run with another configuration's arguments)."""
+    monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+    f = jit(_f)
+    x = jnp.linspace(0.0, 1.0, 5)
+    before = programs.counts()
+    for power in (1, 2, 3.0):
+        for flag in (True, False):
+            for mode in ("a", "b"):
+                out = f(x, Scale(jnp.asarray(2.0), mode), power, flag=flag)
+                want = _f(x, Scale(jnp.asarray(2.0), mode), power, flag)
+                np.testing.assert_allclose(out["y"], want["y"], rtol=1e-14)   # compiled vs op by op: rounding only
+                assert out["mode"] == mode and out["n"] == power
+    out = f(jnp.ones(3), Scale(jnp.asarray(2.0), "a"), 2)           # another shape
+    assert out["y"].shape == (3,)
+    after = programs.counts()
+    assert after["traced"] - before["traced"] == 13
+    assert len(list((tmp_path / "p").glob("*.jaxprog"))) == 13
+    assert after["unkept"] == before["unkept"]
+
+
+def test_an_unknown_static_type_runs_unkept(tmp_path, monkeypatch):
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+
+    class Opaque:
+        pass
+
+    f = jit(lambda x, o: x + 1.0)
+    before = programs.counts()["unkept"]
+    np.testing.assert_array_equal(f(jnp.zeros(2), Opaque()), [1.0, 1.0])
+    assert programs.counts()["unkept"] == before + 1
+    assert not (tmp_path / "p").exists()
+
+
+def test_nested_call_inside_another_program_is_inlined():
+    inner = jit(lambda x, k: x * k)
+    outer = jax.jit(lambda x: inner(x, 3.0) + 1.0)
+    np.testing.assert_allclose(outer(jnp.ones(2)), [4.0, 4.0])
+
+
+SCRIPT = textwrap.dedent("""
+    import json, sys
+    import jax.numpy as jnp
+    from bearingsim import programs
+    from bearingsim.programs import jit
+    sys.path.insert(0, {tests!r})
+    from test_programs import _f, Scale
+    out = jit(_f)(jnp.arange(4.0), Scale(jnp.asarray(3.0), "m"), 2)
+    print(json.dumps(dict(programs.counts(), y=[float(v) for v in out["y"]], mode=out["mode"])))
+""")
+
+
+def _run(cache):
+    env = dict(os.environ, JAX_COMPILATION_CACHE_DIR=str(cache), BEARINGSIM_PROGRAM_CACHE="on")
+    p = subprocess.run([sys.executable, "-c", SCRIPT.format(tests=str(ROOT / "tests"))], env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-3000:]
+    import json
+    return json.loads(p.stdout.strip().splitlines()[-1]), p.stderr
+
+
+def test_a_warm_process_loads_and_does_not_trace(tmp_path):
+    cold, _ = _run(tmp_path)
+    warm, _ = _run(tmp_path)
+    assert cold["traced"] == 1 and cold["loaded"] == 0
+    assert warm["traced"] == 0 and warm["loaded"] == 1
+    assert warm["y"] == cold["y"] == [0.0, 3.0, 12.0, 27.0] and warm["mode"] == "m"
+    # a damaged file: traced again with one line, and replaced
+    (f,) = (tmp_path / "bearingsim-programs").glob("*.jaxprog")
+    f.write_bytes(b"not a program")
+    again, err = _run(tmp_path)
+    assert again["traced"] == 1 and again["y"] == cold["y"]
+    assert "unreadable" in err and "tracing it again" in err
+    assert _run(tmp_path)[0]["loaded"] == 1
+
+
+def test_the_cache_can_be_switched_off(monkeypatch):
+    monkeypatch.setenv("BEARINGSIM_PROGRAM_CACHE", "off")
+    assert programs.program_dir() is None
