@@ -43,6 +43,7 @@ import pickle
 import sys
 import threading
 import types
+import weakref
 from pathlib import Path
 
 import equinox as eqx
@@ -52,13 +53,22 @@ import numpy as np
 from . import runtime
 from .xla import compiler_options
 
-__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "FORMAT"]
+__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT"]
 
 #: the layout of a kept program's file (bumped when it changes)
 FORMAT = 1
 #: per-process counts of programs traced, loaded, compiled, ... (see the module docstring)
 COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0}
 _LOCK = threading.Lock()
+_ALL: "weakref.WeakSet[KeptProgram]" = weakref.WeakSet()
+
+
+def forget() -> None:
+    """Drop every kept program this process holds in memory (the files stay): the next call of
+    each loads it from its file, as a new process would (tests and benchmarks use it)."""
+    for p in list(_ALL):
+        with p._lock:
+            p._programs.clear()
 
 
 def counts() -> dict:
@@ -204,7 +214,9 @@ class KeptProgram:
         self._programs: dict = {}
         self._plain = None
         self._nested = None
+        self._lock = threading.Lock()       # threads calling a new configuration at once trace it once
         functools.update_wrapper(self, fun)
+        _ALL.add(self)
 
     # -- the fallbacks: an ordinary jit (a static it cannot describe) and the nested call
     def _jit(self, *args, **kwargs):
@@ -237,13 +249,16 @@ class KeptProgram:
         key = hashlib.sha256(f"{source_hash()}|{desc}".encode()).hexdigest()[:32]
         prog = self._programs.get(key)
         if prog is None:
-            prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals)
-            if prog is None:
-                return self._jit(*args, **kwargs)
-            self._programs[key] = prog
-        else:
+            with self._lock:
+                prog = self._programs.get(key)
+                if prog is None:
+                    prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals) or False
+                    self._programs[key] = prog
+        elif prog is not False:
             with _LOCK:
                 COUNTS["memory"] += 1
+        if prog is False:                               # jax.export refused it: an ordinary program
+            return self._jit(*args, **kwargs)
         call, template = prog
         try:
             flat = call(*dyn)

@@ -128,3 +128,24 @@ def test_device_and_codec_choices(tmp_path):
     with pytest.raises(InputError, match="compression must be one of"):
         make_dataset(spec(), tmp_path / "x.h5", progress=False, compression="zip")
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_a_warm_process_loads_the_chunk_programs(tmp_path, monkeypatch):
+    """Issue 32: the chunk's programs (states and Newton check, time loop, signal stage, label
+    draws) are traced once per configuration and loaded, not traced, by the next process (here:
+    the memory of this one forgotten, its files kept), with the same bytes.  Over 20 s: it
+    traces the chunk programs once more on purpose (the cold half)."""
+    from bearingsim import programs
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "programs")
+    c = spec().with_value("dataset.count", 3)
+    programs.forget()
+    before = programs.counts()
+    make_dataset(c, tmp_path / "cold.h5", progress=False)
+    cold = programs.counts()
+    assert cold["traced"] - before["traced"] >= 4 and cold["loaded"] == before["loaded"]
+    programs.forget()
+    make_dataset(c, tmp_path / "warm.h5", progress=False)
+    warm = programs.counts()
+    assert warm["traced"] == cold["traced"], "a warm start traced a program again"
+    assert warm["loaded"] - cold["loaded"] == cold["traced"] - before["traced"]
+    assert _bytes(tmp_path / "cold.h5") == _bytes(tmp_path / "warm.h5")

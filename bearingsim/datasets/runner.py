@@ -139,6 +139,7 @@ class ChunkPlan:
     unbridged: np.ndarray = None    # depth_rule "machined" with pass variability: host pit_depths' fractions
     width: int = 16                 # micro-batch width W of every program call (program.micro_batch)
     device: str = None              # JAX platform ("cpu", "gpu"); None: the worker's default
+    max_speed_rpm: float = None     # the spec's fastest speed: sizes the programs (None: the drawn items')
 
     @property
     def chunks(self) -> int:
@@ -231,7 +232,7 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
                        disable=None if progress else True, dynamic_ncols=True)
             plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
                              duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
-                             width, dev.platform)
+                             width, dev.platform, float(ds["speed_rpm"][1]))
             for k, out in imap(simulate_chunk, plan, todo):     # finished chunks, streamed
                 write_chunk(folder, k, out)
                 done += out["index"].size

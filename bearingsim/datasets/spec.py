@@ -22,6 +22,7 @@ from ..case.units import to_si
 from ..physics.defect import LOCATIONS
 from ..errors import InputError, ResultCode
 from ..keys import STREAMS
+from ..programs import jit
 
 __all__ = ["LABEL_FIELDS", "LABEL_DTYPE", "SPLITS", "CLASSES", "RANGES", "CLASS_RANGES", "FIELD_STREAMS",
            "DatasetResult", "DatasetSummary", "result_messages", "settings", "class_counts", "class_of_index",
@@ -243,9 +244,15 @@ def _draw(case, ds, start, n):
     r = {k: (jnp.asarray(v) if isinstance(v, np.ndarray) else v) for k, v in _tables(case, ds).items()}
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
     with _cpu():
-        fn = jax.jit(jax.vmap(lambda key, c, rr: _draw_one(key, c, dict(rr, **flags)), (0, 0, None)))
-        out = fn(jnp.asarray(keys), jnp.asarray(cls), r)
+        out = _draw_batch(jnp.asarray(keys), jnp.asarray(cls), r, flags)
         return keys, cls, {k: np.asarray(v) for k, v in out.items()}
+
+
+@jit
+def _draw_batch(keys, cls, r, flags):
+    """Every item's label draws (one kept program per spec layout: :mod:`bearingsim.programs`)."""
+    import jax
+    return jax.vmap(lambda key, c: _draw_one(key, c, dict(r, **flags)))(keys, cls)
 
 
 def draw_labels(case) -> np.ndarray:

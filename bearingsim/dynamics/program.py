@@ -24,6 +24,8 @@ signal stage takes ``housing_acceleration``, ``sensor`` and ``pass_times`` from 
 """
 from __future__ import annotations
 
+import threading
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -267,6 +269,7 @@ class ChunkProgram:
         self.n_knots = knot_count(bearing.n_balls, 0.5 * shaft, dur, a)
         self.P = pass_count(shaft, dur, bearing, a, sigma)
         self.calls = 0          # device programs launched (a test counts them)
+        self._count = threading.Lock()      # micro-batches may run in threads
 
     def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth, pit=None):
         """The items' quasi-static states and the ball solver's check (device arrays).  Items
@@ -276,18 +279,22 @@ class ChunkProgram:
                 self.slots, self.control, self.hertz_method)
         prep = _states_prepare_jit(*args, pit)
         args = args[:8] + (prep["depth"],) + args[9:]
-        self.calls += 1
+        self._add(1)
         if bool(jax.device_get(prep["failed"])):      # rare: the second pass
             sols = _merge_jit(prep["sols"], _states_jit(*args, 8)[2])
             keep = {k: prep[k] for k in ("depth", "pit_depth", "unbridged", "pit_ok")}
             prep = _prepare_jit(self.bearing, self.curve, prep["op"], prep["defects"], sols, theta0, location, center,
                                 extent, keep["depth"])
             prep.update(keep)
-            self.calls += 3
+            self._add(3)
         return prep
 
+    def _add(self, n):
+        with self._count:
+            self.calls += n
+
     def run(self, prep, keys, loads, theta0, modes, params, iterations):
-        self.calls += 1
+        self._add(1)
         # the count is data (a traced int32): one compiled time loop serves every count of MENU
         return _run_jit(self.bearing, self.curve, prep, keys, loads, theta0, modes, params,
                         jax.device_put(np.int32(int(iterations))),
