@@ -4,8 +4,10 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results/demo
-# compiled JAX programs are reused across processes (tests, CLI runs, notebooks, test workers)
-export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.jax_cache
+# compiled and traced programs are reused across processes: `make demo` fills the user's cache
+# (~/.cache/bearingsim/jax, as every later `bearingsim` command uses it); `make test` uses its own
+# .jax_cache, shared by the test workers, notebooks and CLI subprocesses of the run
+test: export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.jax_cache
 # every program, the small ones too: the 9 notebook kernels, the 2 workers and the CLI subprocesses
 # share ~45 sub-0.1 s programs each (notebook 01, warm cache: 8.3 s user with 0, 9.0 s with 0.5)
 export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0

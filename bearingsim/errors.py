@@ -32,6 +32,7 @@ __all__ = [
     "InvalidStateError",
     "OutputError",
     "ClusterError",
+    "SettingWarning",
 ]
 
 
@@ -97,3 +98,8 @@ class ClusterError(BearingsimError, RuntimeError):
     worker too often (exit code 5: the input is fine, run again when the cluster is)."""
 
     exit_code = 5
+
+
+class SettingWarning(UserWarning):
+    """A setting was changed to one the run can use (e.g. a data set's chunk rounded up to whole
+    micro-batches); the message says from what to what and why."""

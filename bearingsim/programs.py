@@ -118,7 +118,7 @@ def program_dir() -> Path | None:
     if v is not None and v.strip().lower() in runtime.OFF_VALUES:
         return None
     d = runtime.configured_cache_dir()
-    return None if d is None else d / "bearingsim-programs"
+    return None if d is None else d / runtime.PROGRAMS_FOLDER
 
 
 class _Unkept(Exception):
@@ -193,14 +193,15 @@ class _Slot:
         return (_Slot, (self.i,))
 
 
-def _platform(dyn_leaves) -> str:
+def _device(dyn_leaves):
+    """The device a call runs on: a committed argument's, else JAX's default device."""
     for leaf in dyn_leaves:
         if isinstance(leaf, jax.Array) and getattr(leaf, "committed", False):
-            return next(iter(leaf.devices())).platform
+            return next(iter(leaf.devices()))
     dev = jax.config.jax_default_device
-    if dev is not None:
-        return dev if isinstance(dev, str) else dev.platform
-    return jax.default_backend()
+    if dev is None:
+        return jax.devices()[0]
+    return jax.devices(dev)[0] if isinstance(dev, str) else dev
 
 
 class KeptProgram:
@@ -242,18 +243,20 @@ class KeptProgram:
             static = [None if d else v for v, d in zip(leaves, is_dyn)]
             avals = tuple((tuple(np.shape(v)), str(v.dtype), bool(getattr(v, "weak_type", False)))
                           for v in dyn)
+            dev = _device(dyn)
             desc = (f"{self._name}|{_canon(self._fun)}|{_canon_tree(tree)}|{_canon(static)}|{avals}|"
-                    f"{_platform(dyn)}|{_canon(compiler_options())}")
+                    f"{dev.platform}|{_canon(compiler_options())}")
         except _Unkept:
             return self._jit(*args, **kwargs)
         key = hashlib.sha256(f"{source_hash()}|{desc}".encode()).hexdigest()[:32]
-        prog = self._programs.get(key)
+        mem = (key, dev.id)
+        prog = self._programs.get(mem)
         if prog is None:
             with self._lock:
-                prog = self._programs.get(key)
+                prog = self._programs.get(mem)
                 if prog is None:
-                    prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals) or False
-                    self._programs[key] = prog
+                    prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals, dev) or False
+                    self._programs[mem] = prog
         elif prog is not False:
             with _LOCK:
                 COUNTS["memory"] += 1
@@ -275,7 +278,7 @@ class KeptProgram:
             self._nested = eqx.filter_jit(self._fun)
         return self._nested(*args, **kwargs)
 
-    def _load_or_trace(self, key, tree, is_dyn, static, dyn, avals):
+    def _load_or_trace(self, key, tree, is_dyn, static, dyn, avals, dev):
         d = program_dir()
         path = None if d is None else d / f"{key}.jaxprog"
         if path is not None and path.is_file():
@@ -286,13 +289,13 @@ class KeptProgram:
                 exp = jax.export.deserialize(bytearray(blob["exported"]))
                 with _LOCK:
                     COUNTS["loaded"] += 1
-                return self._callable(exp), blob["template"]
+                return self._callable(exp, dev), blob["template"]
             except Exception as e:      # noqa: BLE001 - any unreadable file is traced again
                 print(f"bearingsim: kept program {path.name} of {self._name} unreadable ({type(e).__name__}); "
                       "tracing it again", file=sys.stderr)
         holder = {}
 
-        def flat_fun(*dyn_in):
+        def flat_fun(*dyn_in):       # named after the function below (the exported module's name)
             it = iter(dyn_in)
             args, kwargs = jax.tree_util.tree_unflatten(tree, [next(it) if d_ else s for s, d_ in zip(static, is_dyn)])
             out = self._fun(*args, **kwargs)
@@ -308,9 +311,10 @@ class KeptProgram:
             holder["template"] = jax.tree_util.tree_unflatten(o_tree, slots)
             return arrays
 
+        flat_fun.__name__ = flat_fun.__qualname__ = getattr(self._fun, "__name__", "program")
         specs = [jax.ShapeDtypeStruct(s, np.dtype(t), weak_type=w) for s, t, w in avals]
         try:
-            exp = jax.export.export(jax.jit(flat_fun), platforms=[_platform(dyn)])(*specs)
+            exp = jax.export.export(jax.jit(flat_fun), platforms=[dev.platform])(*specs)
             data = exp.serialize()
             exp = jax.export.deserialize(data)          # the same program, cold or warm
             blob = pickle.dumps({"format": FORMAT, "name": self._name, "exported": bytes(data),
@@ -327,12 +331,19 @@ class KeptProgram:
                 os.replace(tmp, path)
             except OSError:
                 pass            # a read-only cache: kept in memory for this process
-        return self._callable(exp), holder["template"]
+        return self._callable(exp, dev), holder["template"]
 
-    @staticmethod
-    def _callable(exp):
-        opts = compiler_options()
-        return jax.jit(lambda *a: exp.call(*a), compiler_options=opts or None)
+    def _callable(self, exp, dev):
+        def call(*a):
+            return exp.call(*a)
+
+        # compile logs and profiles name the program after its function (jit(ball_errors)); every
+        # argument placed on ``dev``: committed or not, one compiled program (jit compiles again
+        # for another pattern of committed arguments)
+        call.__name__ = call.__qualname__ = getattr(self._fun, "__name__", "program")
+        on = jax.sharding.SingleDeviceSharding(dev)
+        n = len(exp.in_avals)
+        return jax.jit(call, in_shardings=(on,) * n, compiler_options=compiler_options() or None)
 
     def lower(self, *args, **kwargs):
         """The ordinary (unkept) lowering of ``fun`` for these arguments."""

@@ -16,6 +16,9 @@ The folder, in order of precedence (:func:`cache_dir`):
    compile in memory only;
 3. ``$XDG_CACHE_HOME/bearingsim/jax``, else ``~/.cache/bearingsim/jax``.
 
+The traced programs themselves are kept beside them, in ``<folder>/bearingsim-programs``
+(:mod:`bearingsim.programs`: a warm process loads a program instead of tracing it).
+
 Programs that compile in less than ``JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS`` (bearingsim's
 default 0: every program; JAX's own default is 1 s) are not kept.  Clearing the cache is deleting
 the folder (``bearingsim cache --clear``); it is rebuilt by the next run.
@@ -32,9 +35,11 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["OFF_VALUES", "cache_dir", "configure", "configured_cache_dir", "cold", "mark_warm", "cache_size",
+__all__ = ["OFF_VALUES", "PROGRAMS_FOLDER", "cache_dir", "configure", "configured_cache_dir", "cold", "mark_warm", "cache_size",
            "clear_cache"]
 
+#: the subfolder of the cache folder that holds the traced programs (:mod:`bearingsim.programs`)
+PROGRAMS_FOLDER = "bearingsim-programs"
 #: values of ``BEARINGSIM_CACHE_DIR`` that switch the persistent cache off
 OFF_VALUES = ("", "0", "off", "none", "false", "no")
 #: minimum compile time of a kept program, unless JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS says

@@ -118,6 +118,18 @@ def beyond_low_shoulder(b, sol):
     return bool(np.any((Qi > 0) & (np.sin(ai) <= -np.sin(sh[1]))) or np.any((Qo > 0) & (np.sin(ao) <= -np.sin(sh[3]))))
 
 
+def at_groove_bottom(b, sol, loads):
+    """True when a single angular contact bearing with a side load (radial or moment) carries it
+    at the bottom of its groove: its most loaded inner contact below 1 deg (tan alpha ~ F_z / F_r
+    with one or two balls loaded; MODEL.md 11, the second reason of result 7), from the reported
+    per-ball angles and the loads alone."""
+    F = np.asarray(loads, float)
+    Qi, ai = np.asarray(sol.Q_inner), np.asarray(sol.alpha_inner)
+    k = int(np.argmax(Qi))
+    side = bool(np.any(F[[0, 1, 3, 4]] != 0.0))
+    return bool(b.angular_contact) and side and F[2] > 0.0 and Qi[k] > 0.0 and ai[k] < np.radians(1.0)
+
+
 def beyond_high_shoulder(b, sol):
     """True when a loaded contact lies at or beyond a high shoulder's edge (MODEL.md 11), from the
     reported per-ball angles alone (the ball rides on the shoulder: result ``over_shoulder``)."""

@@ -14,7 +14,7 @@ from bearingsim.physics import balls, hertz
 from bearingsim import dynamics as dyn
 from bearingsim.case import load_case, parse_case
 from bearingsim.dynamics.ball_force import ITER_TOL
-from bearingsim.xla import jit
+from bearingsim.programs import jit
 
 CWRU_LIKE = (Path(__file__).resolve().parent / "data" / "cwru_like_6205.toml").read_text()
 CONVERGED = 8           # Newton steps: the lean solve converged (ball loads to ~1e-12, see test_dynamics)

@@ -149,3 +149,14 @@ def test_a_warm_process_loads_the_chunk_programs(tmp_path, monkeypatch):
     assert warm["traced"] == cold["traced"], "a warm start traced a program again"
     assert warm["loaded"] - cold["loaded"] == cold["traced"] - before["traced"]
     assert _bytes(tmp_path / "cold.h5") == _bytes(tmp_path / "warm.h5")
+
+
+def test_a_rounded_chunk_says_so(chunked, tmp_path):
+    """Issue 35: a chunk that is not a whole number of micro-batches was rounded up without a
+    word; now a SettingWarning says from what to what (and the bytes are those of chunk 16)."""
+    from bearingsim.errors import SettingWarning
+    d, _ = chunked
+    with pytest.warns(SettingWarning, match="dataset.chunk 5 rounded up to 16 items"):
+        s = make_dataset(spec20(), tmp_path / "c5.h5", progress=False, chunk=5)
+    assert s.chunk == 16
+    assert _bytes(tmp_path / "c5.h5") == _bytes(d / "c16.h5")

@@ -13,7 +13,7 @@ from bearingsim.signals import sensor
 from bearingsim.case import load_case, parse_case
 from bearingsim.signals.envelope import envelope_spectrum, peak_frequency, squared_envelope
 from bearingsim.physics.sweep import sweep
-from bearingsim.xla import jit
+from bearingsim.programs import jit
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 CWRU_BPFO_MULT = 3.5848

@@ -113,7 +113,8 @@ def _write(tmp_path, name, x, fs):
 
 @pytest.mark.parametrize("what,x,fs,needle", [
     ("short", np.random.default_rng(0).standard_normal(6000), 12000.0, "too short"),
-    ("rate", np.random.default_rng(0).standard_normal(40000), 8000.0, "12000 Hz"),
+    ("rate", np.random.default_rng(0).standard_normal(40000), 8000.0, "identify needs at least 12000 Hz"),
+    ("slow", np.random.default_rng(0).standard_normal(20000), 2000.0, "identify needs at least 12000 Hz"),
     ("nan", np.r_[np.random.default_rng(0).standard_normal(24000), np.nan], 12000.0, "NaN"),
     ("flat", np.zeros(24000), 12000.0, "all samples are equal"),
 ])
@@ -123,6 +124,7 @@ def test_bad_records_exit_2_with_one_message(tmp_path, capsys, what, x, fs, need
     rc = cli.main(["identify", str(p), "--case", SPEC, "--json", str(out)])
     err = capsys.readouterr().err
     assert rc == 2 and needle in err
+    assert str(p) in err and "calibration" not in err and "record:" not in err     # issue 35: the file, identify's rule
     assert not out.exists()
 
 
@@ -206,3 +208,12 @@ def test_clipped_record_gets_no_size(identifier, fresh):
     r = identify(c, 12000.0, SPEC, rpm=float(lab["speed_rpm"][i]), identifier=identifier)
     assert r.clipped and r.length_mm is None
     assert any("clipped" in m for m in r.messages)
+
+
+def test_identify_defaults_to_the_cwru_bearing_like_spectrum(tmp_path, capsys):
+    """Issue 34: identify required --case where spectrum defaults to the CWRU 6205; now both
+    default to it and say so (a short record: refused before any bank is built)."""
+    p = _write(tmp_path, "short.npz", np.random.default_rng(1).standard_normal(6000), 12000.0)
+    assert cli.main(["identify", str(p)]) == 2
+    cap = capsys.readouterr()
+    assert "bearing: dataset_cwru_4class" in cap.out and "too short" in cap.err and str(p) in cap.err

@@ -6,12 +6,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 import bearingsim as bs
 from bearingsim.physics import jones
 from bearingsim.xla import compiler_options
-from conftest import DEG, ball_equilibrium_error, beyond_high_shoulder, beyond_low_shoulder, equilibrium_error, inverted_contacts
+from conftest import (DEG, at_groove_bottom, ball_equilibrium_error, beyond_high_shoulder, beyond_low_shoulder,  # noqa: E402
+                      equilibrium_error, inverted_contacts)
 
 
 # ---------------------------------------------------------------------------- symmetry, limits
@@ -98,6 +99,11 @@ def test_zero_load_at_rest_is_the_unloaded_bearing(b218):
 @given(Fa=st.floats(3000.0, 40000.0), Fx=st.floats(-6000.0, 6000.0), Fy=st.floats(-6000.0, 6000.0),
        Mx=st.floats(-200.0, 200.0), My=st.floats(-200.0, 200.0), rpm=st.sampled_from([0.0, 6000.0, 12000.0]),
        cage=st.floats(0.0, 2 * np.pi))
+# refused as 7 by the groove-bottom rule alone (a random search, issue 35): the older check failed them
+@example(Fa=3406.2914875128213, Fx=1670.2719847905228, Fy=-3220.4197324208944, Mx=182.42622396327783,
+         My=-121.99821703515678, rpm=6000.0, cage=1.9866138111029277)
+@example(Fa=3172.7236382347355, Fx=4139.897744427237, Fy=-1053.9456165577076, Mx=-113.3153868703126,
+         My=178.4653270779126, rpm=12000.0, cage=0.5392560412170171)
 def test_global_equilibrium_random_combined_loads(b218, Fa, Fx, Fy, Mx, My, rpm, cage):
     """Ring and ball equilibrium re-derived in numpy from the reported per-ball output: 1e-9
     relative (the solver's tolerance is 1e-11 of the largest load).
@@ -105,17 +111,22 @@ def test_global_equilibrium_random_combined_loads(b218, Fa, Fx, Fy, Mx, My, rpm,
     Part of this load space lies outside the model at speed (about 1 draw in 260 at 12 krpm: a
     lightly loaded ball's contact crosses the 218's low shoulder at -11.22 deg; near it others
     climb over the 74 deg high shoulder).  A refusal is accepted only when an independent check of
-    the returned state confirms its reason (a loaded contact at or beyond the low shoulder, code
-    7, or the high one, code 8, from the per-ball angles); any other refusal fails."""
+    the returned state confirms its reason (code 7: a loaded contact at or beyond the low
+    shoulder, or the side load carried at the bottom of the groove, the most loaded inner contact
+    below 1 deg; code 8: a loaded contact at or beyond the high shoulder; from the per-ball angles
+    and the loads); any other refusal fails.  The explicit examples are draws the derandomized
+    search can move onto after a change of code (issue 35: 0.5 % of draws were refused by the
+    groove-bottom rule alone and failed the older check)."""
     op = bs.Operation.from_rpm(rpm)
-    sol = bs.solve(b218, op, bs.Loads(axial=Fa, radial_x=Fx, radial_y=Fy, moment_x=Mx, moment_y=My),
-                   cage_angle=cage, throw=False)
+    loads = bs.Loads(axial=Fa, radial_x=Fx, radial_y=Fy, moment_x=Mx, moment_y=My)
+    sol = bs.solve(b218, op, loads, cage_angle=cage, throw=False)
     code = int(sol.result)
     if code != 0:
         assert code in (int(jones.RESULTS.low_shoulder), int(jones.RESULTS.over_shoulder)), (
             code, jones.RESULTS.of(code).message)
         if code == int(jones.RESULTS.low_shoulder):
-            assert beyond_low_shoulder(b218, sol), "refused as low shoulder, but no loaded contact is beyond it"
+            assert beyond_low_shoulder(b218, sol) or at_groove_bottom(b218, sol, loads), (
+                "refused as low shoulder, but no loaded contact is beyond it and the load is not at the groove bottom")
         else:
             assert beyond_high_shoulder(b218, sol), "refused as over the shoulder, but no loaded contact is"
         return

@@ -110,3 +110,26 @@ def test_static_refuses_the_random_search_state_with_an_85_deg_contact(tmp_path,
                  .replace("axial_N = 17800", "axial_N = 3000\nmoment_y_Nm = 152"))
     assert main(["static", str(p)]) == 3
     assert "beyond the edge of its groove" in capsys.readouterr().err
+
+
+def test_a_ball_over_a_spall_past_a_shoulder_is_returned_flagged_not_silent():
+    """Issue 35 / docs/physics.md section 10a: the one stated exemption of the groove-edge rule.
+    A Harris 218 with a 3.28 deg, 0.383 mm outer spall at 10 263 rpm (12.5 kN axial, 21 N radial;
+    a random-search state): the ball over the spall drops in and its inner contact turns to
+    ~79 deg, past the 74 deg high shoulder, carrying ~460 N.  It is returned as converged (result
+    0: the spall-entry state the seed paper studies) and flagged per contact by the limits, on
+    that ball only; a script reads ``contact_limits(...).over_shoulder``."""
+    import bearingsim as bs
+    from bearingsim.case import load_case
+    from bearingsim.physics.defect import Spall
+    from bearingsim.physics.limits import contact_limits
+
+    b = load_case("demo").bearing()
+    sp = Spall(0.0, np.radians(3.284824586199771), 0.3832361174491989e-3, "rectangular", "outer", 0)
+    sol = bs.solve(b, bs.Operation.from_rpm(10263.0), bs.Loads(axial=12517.0, radial_x=21.0),
+                   cage_angle=-0.018036276649185723, spall=sp, throw=False)
+    assert int(sol.result) == 0
+    over = np.asarray(contact_limits(sol, b, "outer").over_shoulder)
+    assert over[0] and not over[1:].any()                        # ball 0 sits over the spall
+    assert np.degrees(float(sol.alpha_inner[0])) > np.degrees(float(b.shoulders[0])) > 70.0
+    assert float(sol.Q_inner[0]) > 100.0

@@ -16,6 +16,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from pathlib import Path
 
 from ..datasets import budget
@@ -108,6 +109,7 @@ def cmd_info(args):
 
 
 def cmd_static(args):
+    budget.check_output(args.plot, "--plot")        # before any work (exit 4)
     case = load_case(args.case)
     _compiling(case, "static")
     workflows.static_command(case, args.json, args.plot, say=print)
@@ -221,6 +223,7 @@ _RECORD_FLAGS = (("case", "--case"), ("rpm", "--rpm"), ("channel", "--channel"),
 def cmd_spectrum(args):
     from ..errors import InputError
 
+    budget.check_output(args.plot, "--plot")        # before any work (exit 4)
     if Path(args.input).suffix.lower() in (".h5", ".hdf5"):
         given = [flag for attr, flag in _RECORD_FLAGS if getattr(args, attr, None) is not None]
         if given:
@@ -241,8 +244,11 @@ def cmd_cache(args):
         print("compilation cache: off (BEARINGSIM_CACHE_DIR=off): every run compiles")
         return 0
     n, b = runtime.cache_size(d)
+    kept, kb = runtime.cache_size(d / runtime.PROGRAMS_FOLDER)
     print(f"compilation cache: {d} ({n} files, {budget.human_bytes(b)}); move it with "
           "BEARINGSIM_CACHE_DIR=FOLDER, switch it off with BEARINGSIM_CACHE_DIR=off")
+    print(f"  of which traced programs: {kept} files, {budget.human_bytes(kb)} in {d / runtime.PROGRAMS_FOLDER} "
+          "(loaded instead of traced by the next run; BEARINGSIM_PROGRAM_CACHE=off keeps them in memory)")
     if args.clear:
         print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
     return 0
@@ -344,7 +350,9 @@ def cmd_calibrate(args):
 def cmd_identify(args):
     from ..realism import identify as ident
 
-    case = load_case(args.case)
+    case = load_case(args.case or "dataset_cwru_4class")
+    if args.case is None:
+        print("bearing: dataset_cwru_4class (the CWRU drive-end 6205; give --case for another)")
     budget.check_output(args.plot, "--plot")
     budget.check_output(args.json, "--json")
     r, x, fs = ident.identify_file(args.record, case, channel=args.channel, rpm=args.rpm,
@@ -491,8 +499,9 @@ def build_parser():
                  "location with a probability, defect length, contact angle and shaft speed with intervals",
                  positional=("record", "RECORD", "record: .npz (channel, fs, rpm), .npy, .csv or .txt (one column)"),
                  plot=("OUT.png", "the record against a simulated twin at the estimate"))
-    s.add_argument("--case", required=True, metavar="CASE", help="the bearing's case (its geometry; the "
-                   "operating point is estimated), e.g. dataset_cwru_4class")
+    s.add_argument("--case", default=None, metavar="CASE", help="the bearing's case (its geometry; the "
+                   "operating point is estimated; default dataset_cwru_4class, the CWRU drive-end 6205, as "
+                   "spectrum's default)")
     s.add_argument("--rpm", type=float, metavar="N", help="nominal shaft speed (searched +-10 %%; default "
                    "the .npz rpm or the case's speed)")
     s.add_argument("--channel", help="the .npz key of the signal (default DE, or the file's only array)")
@@ -569,13 +578,25 @@ def _stop_handlers():
     return {sg: signal.signal(sg, _stop) for sg in (signal.SIGINT, signal.SIGTERM)}
 
 
+def _format_warning(message, category, filename, lineno, line=None):
+    """A warning as one line a person reads (no package path, no source line): bearingsim's own
+    (:class:`bearingsim.OverloadWarning`, ...) as ``bearingsim: warning: MESSAGE``, another
+    package's with its category.  (``warnings.formatwarning``: a caller recording warnings,
+    e.g. ``pytest.warns``, still records them.)"""
+    own = category.__module__.split(".")[0] == "bearingsim"
+    text = " ".join(str(message).split())
+    return (f"bearingsim: warning: {text}" if own else f"bearingsim: warning ({category.__name__}): {text}") + "\n"
+
+
 def main(argv=None):
     """Run ``bearingsim ARGS``; returns the exit code (Ctrl-C / SIGTERM at any moment: one
-    line, 130, nothing half-written: every file is written atomically)."""
+    line, 130, nothing half-written: every file is written atomically).  Warnings are one line
+    each (:func:`_format_warning`)."""
     _stopped_by.clear()
     _outputs.clear()
     old = _stop_handlers()
     old_hook, sys.unraisablehook = sys.unraisablehook, _unraisable
+    old_format, warnings.formatwarning = warnings.formatwarning, _format_warning
     try:
         args = build_parser().parse_args(argv)
         import matplotlib
@@ -607,6 +628,7 @@ def main(argv=None):
         for sg, h in old.items():
             signal.signal(sg, h)
         sys.unraisablehook = old_hook
+        warnings.formatwarning = old_format
         while _watchdog:
             _watchdog.pop().cancel()
 

@@ -115,7 +115,9 @@ class Case:
         Setting one key of an exactly-one pair (e.g. ``bearing.diametral_clearance_mm``) removes
         the other.  Computed defaults (``sweep.stop_deg``) follow the change unless given
         explicitly.  The new ``text`` is the TOML of the changed file (comments are not kept).
-        Raises CaseError if the result is invalid.
+        Raises CaseError if the result is invalid.  The new case's ``source`` names the change
+        (``demo.toml with operation.speed_rpm = 12000``), so that an error about the changed case
+        says which value was changed.
         """
         if lookup(dotted_key) is None:
             valid = all_keys()
@@ -123,8 +125,9 @@ class Case:
         if hasattr(value, "item") and not isinstance(value, (bool, int, float, str)):
             value = value.item()  # numpy / jax scalars
         raw = set_raw(self.raw, dotted_key, value)
-        text = to_toml(raw, header=f"{self.source} with {dotted_key} = {fmt_value(value)}")
-        return _case_from_raw(raw, text, self.source)
+        changed = f"{self.source} with {dotted_key} = {fmt_value(value)}"
+        text = to_toml(raw, header=changed)
+        return _case_from_raw(raw, text, changed)          # errors name the change, not only the file
 
     def study_cases(self) -> list["Case"]:
         """One case per study value (each without the [study] section); [] without a study."""

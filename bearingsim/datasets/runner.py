@@ -18,6 +18,7 @@ import shutil
 import signal
 import threading
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..case import check_sampling
-from ..errors import BearingsimError, InputError
+from ..errors import BearingsimError, InputError, SettingWarning
 from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
@@ -203,8 +204,12 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     n = lab.size
     chunk = ds.get("chunk", 16) if chunk is None else chunk
     chunk = default_chunk(dev, T, n) if chunk in (0, "auto") else min(int(chunk), n)
-    width = micro_batch(dev.platform)
-    chunk = -(-chunk // width) * width              # a whole number of micro-batches
+    width = micro_batch(dev.platform, dev, T, n)
+    asked, chunk = chunk, -(-chunk // width) * width        # a whole number of micro-batches
+    if chunk != asked and asked != n:
+        warnings.warn(f"dataset.chunk {asked} rounded up to {chunk} items: a chunk is a whole number of "
+                      f"micro-batches of {width} items on {dev.platform} (bearingsim.datasets.MICRO_BATCH)",
+                      SettingWarning, stacklevel=2)
     slots = slots_of(lab)
     loc, extent, depth, center = defect_geometry(ph.bearing, lab)
     folder = partial_path(path)

@@ -662,9 +662,15 @@ def result_hint(code, loads=None, *, bearing=None, in_set=False) -> str:
         if F is not None and F[2] < 0.0:
             return r.hint
         if F is not None and (Fr > 0.0 or M > 0.0):
-            need = "" if acbb_angle is None else (
-                f"; at least ~1.25 Fr tan(alpha_0) = {1.25 * Fr * np.tan(acbb_angle):.4g} N keeps half "
-                "the balls loaded")
+            least = None if acbb_angle is None else 1.25 * Fr * np.tan(acbb_angle)
+            if least is not None and F[2] >= least:         # the axial load is not what is short
+                return (f"the axial load Fz = {F[2]:.4g} N already exceeds ~1.25 Fr tan(alpha_0) = {least:.4g} N "
+                        f"for Fr = {Fr:.4g} N; what leaves a loaded contact at or beyond a low shoulder here is "
+                        f"the moment ({M:.4g} N m: it unloads the balls on one side) or the speed (centrifugal "
+                        "force turns a lightly loaded ball's outer contact towards the groove bottom): lower the "
+                        "moment or the speed, or raise the axial load (or preload) well above that figure")
+            need = "" if least is None else (
+                f"; at least ~1.25 Fr tan(alpha_0) = {least:.4g} N keeps half the balls loaded")
             return (f"an angular contact bearing without enough axial load (here Fz = {F[2]:.4g} N against "
                     f"Fr = {Fr:.4g} N and a moment of {M:.4g} N m) cannot carry radial load or a moment: "
                     "each loaded contact's axial component pushes the inner ring against the contact "

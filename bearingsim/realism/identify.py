@@ -354,27 +354,33 @@ def _resample(x, fs):
     return ss.resample_poly(x, fr.numerator, fr.denominator)
 
 
+#: what identify asks of a record's sample rate (check_record's ``needs``)
+_NEEDS = ("identify", BANK_FS, "the bank of simulated records it learned from is sampled at 12 kHz")
+
+
 def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
-             min_seconds=MIN_SECONDS) -> Identification:
+             min_seconds=MIN_SECONDS, what="record") -> Identification:
     """Identify the fault of record ``x`` (m/s^2 or g: the scale does not matter) sampled at ``fs``
     (Hz, >= 12 kHz) on the bearing of ``case`` (a Case or a shipped name; its geometry is used, its
     operating point is what is estimated).  ``rpm``: the nominal shaft speed (search +-10 %; default
     the case's speed).  ``identifier``: a trained :class:`Identifier` (default: the cached bank's).
     ``min_seconds``: the shortest record accepted (the benchmark's round trip passes the bank's
-    own 0.2 s; a record file must hold :data:`bearingsim.realism.records.MIN_SECONDS`)."""
+    own 0.2 s; a record file must hold :data:`bearingsim.realism.records.MIN_SECONDS`).  ``what``:
+    how messages name the record (its file name, from :func:`identify_file`)."""
     from ..case import load_case
 
     case = load_case(case) if isinstance(case, (str, Path)) else case
     a = np.asarray(x)
     short = a.ndim == 1 and fs is not None and a.size < MIN_SECONDS * float(fs)
-    x = check_record(np.tile(a, int(math.ceil(MIN_SECONDS * float(fs) / max(a.size, 1)))) if short else a, fs)
+    x = check_record(np.tile(a, int(math.ceil(MIN_SECONDS * float(fs) / max(a.size, 1)))) if short else a, fs,
+                     what=what, needs=_NEEDS)
     x = x[:a.size] if short else x
     fs = float(fs)
     if x.size < max(float(min_seconds), BANK_WINDOW_S) * fs:
-        raise InputError(f"record: {x.size} samples = {x.size / fs:.3g} s at {fs:g} Hz is too short: "
+        raise InputError(f"{what}: {x.size} samples = {x.size / fs:.3g} s at {fs:g} Hz is too short: "
                          f"identify needs at least {max(float(min_seconds), BANK_WINDOW_S):g} s")
     if fs < BANK_FS - 1e-6:
-        raise InputError(f"record: sample rate {fs:g} Hz is too low: identify needs at least {BANK_FS:g} Hz "
+        raise InputError(f"{what}: sample rate {fs:g} Hz is too low: identify needs at least {BANK_FS:g} Hz "
                          "(the bank of simulated records it learned from is sampled at 12 kHz)")
     b = case.bearing()
     nominal = float(rpm) if rpm is not None else float(case.data["operation"]["speed_rpm"])
@@ -476,8 +482,9 @@ def identify_file(path, case, *, channel=None, rpm=None, sample_rate=None, ident
         if "does not say its unit" not in str(e):
             raise
         x, fs, _, rpm_file, _ = read_record(path, channel=channel, sample_rate=sample_rate, unit="g")
-    x = check_record(x, fs, what=str(path))
-    return identify(x, fs, case, rpm=rpm if rpm is not None else rpm_file, identifier=identifier), x, fs
+    x = check_record(x, fs, what=str(path), needs=_NEEDS)
+    return identify(x, fs, case, rpm=rpm if rpm is not None else rpm_file, identifier=identifier,
+                    what=str(path)), x, fs
 
 
 # ----------------------------------------------------------------------------------- output

@@ -23,8 +23,13 @@ MIN_SECONDS = 1.0
 MIN_SAMPLE_RATE_HZ = 2400.0
 
 
-def check_record(x, fs, what="record", case=None, max_rpm=None) -> np.ndarray:
-    """The record as a 1-D float64 array, or InputError saying what is wrong (every problem)."""
+def check_record(x, fs, what="record", case=None, max_rpm=None,
+                 needs=("calibration", None, "resonances and envelope bands from 1 kHz up to 0.45 fs")) -> np.ndarray:
+    """The record as a 1-D float64 array, or InputError saying what is wrong (every problem).
+    ``needs``: (the command, its lowest sample rate in Hz (None: :data:`MIN_SAMPLE_RATE_HZ`), why),
+    for the message of a sample rate too low."""
+    purpose, min_fs, why = needs
+    min_fs = MIN_SAMPLE_RATE_HZ if min_fs is None else float(min_fs)
     problems = []
     try:
         fs_ok = fs is not None and math.isfinite(float(fs)) and float(fs) > 0
@@ -33,9 +38,9 @@ def check_record(x, fs, what="record", case=None, max_rpm=None) -> np.ndarray:
     if not fs_ok:
         problems.append(f"{what}: sample rate {fs!r} Hz: give a finite sample rate > 0 "
                         "(--sample-rate-Hz, or the key fs of an .npz file)")
-    elif float(fs) < MIN_SAMPLE_RATE_HZ:
-        problems.append(f"{what}: sample rate {float(fs):g} Hz is too low: calibration needs at least "
-                        f"{MIN_SAMPLE_RATE_HZ:g} Hz (resonances and envelope bands from 1 kHz up to 0.45 fs)")
+    elif float(fs) < min_fs - 1e-6:
+        problems.append(f"{what}: sample rate {float(fs):g} Hz is too low: {purpose} needs at least "
+                        f"{min_fs:g} Hz ({why})")
     a = np.asarray(x)
     if a.dtype.kind not in "biuf":
         problems.append(f"{what}: samples of type {a.dtype} are not numbers")
@@ -52,7 +57,7 @@ def check_record(x, fs, what="record", case=None, max_rpm=None) -> np.ndarray:
             problems.append(f"{what}: {bad} of {a.size} samples are NaN or infinite")
         if fs_ok and a.size / float(fs) < MIN_SECONDS:
             problems.append(f"{what}: {a.size} samples = {a.size / float(fs):.3g} s at {float(fs):g} Hz is "
-                            f"too short: calibration needs at least {MIN_SECONDS:g} s")
+                            f"too short: {purpose} needs at least {MIN_SECONDS:g} s")
         if not bad and a.size > 1 and np.ptp(a) == 0:
             problems.append(f"{what}: all samples are equal (no signal)")
     if fs_ok and case is not None and max_rpm is not None and float(fs) >= MIN_SAMPLE_RATE_HZ:
