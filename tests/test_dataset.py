@@ -202,6 +202,7 @@ def _interrupting(monkeypatch, at_call, how):
     import bearingsim.datasets as dsm
 
     monkeypatch.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
+    monkeypatch.setenv("BEARINGSIM_THREADS", "1")      # chunks in order: "call 2" is chunk 1's
     real = dsm.program.device_program
     calls = []
 

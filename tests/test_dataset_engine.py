@@ -33,7 +33,7 @@ def chunked(tmp_path_factory):
     calls = []
     mp = pytest.MonkeyPatch()
     real = dsm.program.device_program
-    mp.setattr(dsm.program, "device_program", lambda plan, pad: (calls.append(pad.size), real(plan, pad))[1])
+    mp.setattr(dsm.program, "device_program", lambda plan, pad, *a: (calls.append(pad.size), real(plan, pad, *a))[1])
     try:
         out = {}
         for name, chunk in (("c16", 16), ("c64", 64), ("c64b", 64)):
@@ -94,11 +94,12 @@ def test_a_chunk_makes_no_host_round_trip(tmp_path):
     plan = {}
     real = dsm.runner.simulate_chunk
 
-    def grab(p, k):
+    def grab(p, k, *a, **kw):
         plan["p"] = p
-        return real(p, k)
+        return real(p, k, *a, **kw)
     mp = pytest.MonkeyPatch()
     mp.setattr(dsm.runner, "simulate_chunk", grab)
+    mp.setenv("BEARINGSIM_THREADS", "1")        # the chunks one after the other: simulate_chunk itself
     try:
         make_dataset(case, tmp_path / "g.h5", progress=False)
     finally:

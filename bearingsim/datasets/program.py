@@ -189,15 +189,17 @@ def _host_inputs(plan, pad):
     return sim, sig
 
 
-def device_program(plan, pad):
+def device_program(plan, pad, threads=None):
     """The chunk's programs on the padded item indices ``pad`` (a multiple of ``plan.width``
     items): per micro-batch of W = ``plan.width`` items the chunk program
     (:func:`bearingsim.dynamics.chunk_program`: states, pit depths, Newton count, motion, time
     loop) and the signal stage (:func:`bearingsim.signals.signal_stage.finish_items`: pass variability,
     strikes, noise, background, fault level, issue 26's ingredients), every draw from the item's
     key.  The inputs go to the device explicitly (``jax.device_put``) and the outputs come back
-    explicitly (``jax.device_get``): no implicit transfer and no per-item host work.  Returns a
-    dict of (len(pad),) / (len(pad), T) host arrays: the signals and :data:`CHUNK_FIELDS`."""
+    explicitly (``jax.device_get``): no implicit transfer and no per-item host work.  The
+    micro-batches run in ``threads`` threads (None: :func:`program_threads`; 1 when the caller
+    already runs chunks side by side).  Returns a dict of (len(pad),) / (len(pad), T) host
+    arrays: the signals and :data:`CHUNK_FIELDS`."""
     import jax
 
     from ..signals.signal_stage import finish_items
@@ -225,7 +227,7 @@ def device_program(plan, pad):
         return host
 
     starts = range(0, pad.size, W)
-    threads = min(program_threads(dev), len(starts))
+    threads = min(program_threads(dev) if threads is None else int(threads), len(starts))
     if threads > 1:         # a CPU program runs on one core: one micro-batch per core at a time
         with ThreadPoolExecutor(threads, thread_name_prefix="bearingsim-micro-batch") as pool:
             parts = list(pool.map(micro, starts))
@@ -255,7 +257,7 @@ def device_program(plan, pad):
     return out
 
 
-def simulate_chunk(plan, k: int) -> dict:
+def simulate_chunk(plan, k: int, threads=None) -> dict:
     """Chunk ``k`` of a data set: the arrays of its chunk file (``index``, ``signals`` and the
     per-item label fields the simulation fills, :data:`CHUNK_FIELDS`, and ``ball_iterations``:
     the Newton count each item's micro-batch ran with).  A pure function of (plan, k): every
@@ -263,7 +265,8 @@ def simulate_chunk(plan, k: int) -> dict:
     width ``plan.width`` (the chunk padded to a multiple of it with its last item; only the
     micro-batches holding items run), so the in-process loop, any chunk size that is a multiple
     of the width and any Dask worker give the same bytes on the same device type.  Runs on
-    ``plan.device`` (a JAX platform name; None: JAX's default)."""
+    ``plan.device`` (a JAX platform name; None: JAX's default); ``threads``: see
+    :func:`device_program`."""
     import contextlib
 
     import jax
@@ -274,7 +277,7 @@ def simulate_chunk(plan, k: int) -> dict:
     pad = np.concatenate([idx, np.repeat(idx[-1:], -(-m // W) * W - m)])
     where = jax.default_device(jax.devices(plan.device)[0]) if plan.device else contextlib.nullcontext()
     with where:
-        out = device_program(plan, pad)
+        out = device_program(plan, pad) if threads is None else device_program(plan, pad, threads)
     return dict(index=idx, **{name: v[:m] for name, v in out.items()})
 
 

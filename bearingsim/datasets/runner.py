@@ -19,7 +19,10 @@ import signal
 import threading
 import time
 import warnings
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from itertools import islice
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,13 +30,13 @@ import numpy as np
 
 from ..case import check_sampling
 from ..errors import BearingsimError, InputError, SettingWarning
-from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, run_settings, simulate_chunk
+from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, program_threads, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
 from .writer import (assemble, finished_chunks, open_partial, partial_path, read_chunk, spec_record, chunk_path,
                      write_chunk)
 
-__all__ = ["ChunkPlan", "Interrupted", "serial_imap", "make_dataset", "resolve_device", "default_chunk",
+__all__ = ["ChunkPlan", "Interrupted", "serial_imap", "threaded_imap", "make_dataset", "resolve_device", "default_chunk",
            "BYTES_PER_SAMPLE", "MAX_GPU_CHUNK", "DEVICES"]
 
 #: the device names of ``--device`` (JAX platform names)
@@ -80,6 +83,40 @@ def serial_imap(fn, shared, items):
     :class:`bearingsim.datasets.distributed.DaskRunner` has the same ``imap`` on a Dask cluster."""
     for x in items:
         yield x, fn(shared, x)
+
+
+def _chunk_alone(plan, k):
+    """Chunk ``k`` with its micro-batches in one thread (chunks already run side by side)."""
+    return simulate_chunk(plan, k, threads=1)
+
+
+def threaded_imap(threads):
+    """An ``imap`` like :func:`serial_imap` that runs up to ``threads`` items at once in threads of
+    this process and yields them in order, the next one submitted before one is yielded (a
+    compiled CPU program runs on one core: two chunks on two cores).  Results do not depend on
+    the thread count (each item is the same programs on its own data)."""
+    def imap(fn, shared, items):
+        items = list(items)
+        if threads <= 1 or len(items) <= 1:
+            yield from serial_imap(fn, shared, items)
+            return
+        pool = ThreadPoolExecutor(threads, thread_name_prefix="bearingsim-chunk")
+        try:
+            todo = iter(items)
+            pending = deque((x, pool.submit(fn, shared, x)) for x in islice(todo, threads))
+            while pending:
+                x, fut = pending.popleft()
+                out = fut.result()
+                nxt = next(todo, _END)
+                if nxt is not _END:
+                    pending.append((nxt, pool.submit(fn, shared, nxt)))
+                yield x, out
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+    return imap
+
+
+_END = object()
 
 
 def resolve_device(device=None):
@@ -238,7 +275,9 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
             plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
                              duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
                              width, dev.platform, float(ds["speed_rpm"][1]))
-            for k, out in imap(simulate_chunk, plan, todo):     # finished chunks, streamed
+            threads = program_threads(dev) if runner is None else 1
+            run = (threaded_imap(threads), _chunk_alone) if threads > 1 and len(todo) > 1 else (imap, simulate_chunk)
+            for k, out in run[0](run[1], plan, todo):     # finished chunks, streamed in order
                 write_chunk(folder, k, out)
                 done += out["index"].size
                 bar.update(out["index"].size)
