@@ -20,6 +20,9 @@ JOBS ?= 2
 # cold cache, 2-core VM: 126 s -> 75 s of CPU); `make demo`, the benchmarks and users keep XLA's
 # optimised default.  XLA_FLAGS= make test runs the suite at the default level.
 test: export XLA_FLAGS ?= --xla_backend_optimization_level=0
+# the xdist workers already fill the cores: a data set's chunks run one at a time in a test
+# (tests/test_dataset_engine.py runs them side by side on purpose and compares the bytes)
+test: export BEARINGSIM_THREADS ?= 1
 
 .PHONY: demo test venv clean bench
 

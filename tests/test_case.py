@@ -581,7 +581,7 @@ def test_with_value_round_trips_through_toml():
     c2 = c.with_value("operation.speed_rpm", 5000)
     assert c.get("operation.speed_rpm") == 10000.0  # the original is unchanged
     assert c2.get("operation.speed_rpm") == 5000.0
-    assert c2.source == "example.toml"
+    assert c2.source == "example.toml with operation.speed_rpm = 5000"     # errors name the change (issue 34)
     again = parse_case(c2.text)
     assert again.data == c2.data
     expected = dict(c.data, operation=dict(c.data["operation"], speed_rpm=5000.0))

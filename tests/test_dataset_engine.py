@@ -32,6 +32,7 @@ def chunked(tmp_path_factory):
     d = tmp_path_factory.mktemp("engine")
     calls = []
     mp = pytest.MonkeyPatch()
+    mp.setenv("BEARINGSIM_THREADS", "2")        # chunks and micro-batches side by side (make test sets 1)
     real = dsm.program.device_program
     mp.setattr(dsm.program, "device_program", lambda plan, pad, *a: (calls.append(pad.size), real(plan, pad, *a))[1])
     try:
@@ -152,10 +153,12 @@ def test_a_warm_process_loads_the_chunk_programs(tmp_path, monkeypatch):
     assert _bytes(tmp_path / "cold.h5") == _bytes(tmp_path / "warm.h5")
 
 
-def test_a_rounded_chunk_says_so(chunked, tmp_path):
+def test_a_rounded_chunk_says_so(chunked, tmp_path, monkeypatch):
     """Issue 35: a chunk that is not a whole number of micro-batches was rounded up without a
-    word; now a SettingWarning says from what to what (and the bytes are those of chunk 16)."""
+    word; now a SettingWarning says from what to what (and the bytes are those of chunk 16; this
+    run one chunk after the other, that one side by side: threads change no byte)."""
     from bearingsim.errors import SettingWarning
+    monkeypatch.setenv("BEARINGSIM_THREADS", "1")
     d, _ = chunked
     with pytest.warns(SettingWarning, match="dataset.chunk 5 rounded up to 16 items"):
         s = make_dataset(spec20(), tmp_path / "c5.h5", progress=False, chunk=5)

@@ -19,7 +19,7 @@ SNIPPET = ("import sys, bearingsim, jax, jax.numpy as jnp; "
 
 def run(env_extra, tmp_path, code=SNIPPET):
     env = {k: v for k, v in os.environ.items()
-           if k not in ("JAX_COMPILATION_CACHE_DIR", "BEARINGSIM_CACHE_DIR", "XDG_CACHE_HOME",
+           if k not in ("JAX_COMPILATION_CACHE_DIR", "BEARINGSIM_CACHE_DIR", "XDG_CACHE_HOME", "BEARINGSIM_CACHE",
                         "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "JAX_ENABLE_X64")}
     env.update(HOME=str(tmp_path / "home"), PYTHONPATH=str(ROOT), **env_extra)
     r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300,
@@ -125,5 +125,11 @@ def test_cache_command_says_where_and_clears(tmp_path):
     code = ("from bearingsim.app.cli import main; import jax, jax.numpy as jnp; jax.jit(lambda x: x + 2.0)(jnp.ones(2)); "
             "main(['cache']); main(['cache', '--clear'])")
     d = tmp_path / "c"
-    out = " ".join(run({"BEARINGSIM_CACHE_DIR": str(d)}, tmp_path, code))
+    banks = tmp_path / "banks"          # never the test session's bank cache (run() drops BEARINGSIM_CACHE)
+    banks.mkdir()
+    (banks / "identify_bank_160_7101_v6.h5").write_bytes(b"x" * 10)
+    (banks / "keep.txt").write_text("not a bank")
+    out = " ".join(run({"BEARINGSIM_CACHE_DIR": str(d), "BEARINGSIM_CACHE": str(banks)}, tmp_path, code))
     assert f"compilation cache: {d}" in out and "cleared:" in out and not entries(d)
+    assert "identify banks:" in out and "1 identify bank files deleted" in out     # issue 34: the bank too
+    assert sorted(p.name for p in banks.iterdir()) == ["keep.txt"]

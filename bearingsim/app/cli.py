@@ -236,28 +236,44 @@ def cmd_spectrum(args):
 
 
 def cmd_cache(args):
-    """``bearingsim cache [--clear]``: where the compiled programs are kept, how much, clearing."""
+    """``bearingsim cache [--clear]``: where the compiled and traced programs and the identify
+    banks are kept, how much, clearing."""
     from .. import runtime
+    from ..realism.identify import cache_dir as bank_dir
 
     d = runtime.configured_cache_dir()
+    banks = sorted(bank_dir().glob("identify_bank_*"))
     if d is None:
         print("compilation cache: off (BEARINGSIM_CACHE_DIR=off): every run compiles")
-        return 0
-    n, b = runtime.cache_size(d)
-    kept, kb = runtime.cache_size(d / runtime.PROGRAMS_FOLDER)
-    print(f"compilation cache: {d} ({n} files, {budget.human_bytes(b)}); move it with "
-          "BEARINGSIM_CACHE_DIR=FOLDER, switch it off with BEARINGSIM_CACHE_DIR=off")
-    print(f"  of which traced programs: {kept} files, {budget.human_bytes(kb)} in {d / runtime.PROGRAMS_FOLDER} "
-          "(loaded instead of traced by the next run; BEARINGSIM_PROGRAM_CACHE=off keeps them in memory)")
+    else:
+        n, b = runtime.cache_size(d)
+        kept, kb = runtime.cache_size(d / runtime.PROGRAMS_FOLDER)
+        print(f"compilation cache: {d} ({n} files, {budget.human_bytes(b)}); move it with "
+              "BEARINGSIM_CACHE_DIR=FOLDER, switch it off with BEARINGSIM_CACHE_DIR=off")
+        print(f"  of which traced programs: {kept} files, {budget.human_bytes(kb)} in {d / runtime.PROGRAMS_FOLDER} "
+              "(loaded instead of traced by the next run; BEARINGSIM_PROGRAM_CACHE=off keeps them in memory)")
+    size = sum(p.stat().st_size for p in banks if p.is_file())
+    print(f"identify banks: {bank_dir()} ({len(banks)} files, {budget.human_bytes(size)}; simulated records "
+          "identify learns from, built once; move them with BEARINGSIM_CACHE=FOLDER)")
     if args.clear:
-        print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
+        if d is not None:
+            print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
+        gone = 0
+        for p in banks:
+            try:
+                p.unlink()
+                gone += 1
+            except OSError:
+                pass
+        print(f"cleared: {gone} identify bank files deleted; the next identify builds its bank again")
     return 0
 
 
 def _cache_parser(sub):
-    s = sub.add_parser("cache", help="where the compiled programs are kept (the persistent compilation "
-                       "cache: ~/.cache/bearingsim/jax, BEARINGSIM_CACHE_DIR), and --clear")
-    s.add_argument("--clear", action="store_true", help="delete the cached programs")
+    s = sub.add_parser("cache", help="where the compiled and traced programs (~/.cache/bearingsim/jax, "
+                       "BEARINGSIM_CACHE_DIR) and the identify banks (~/.cache/bearingsim, BEARINGSIM_CACHE) "
+                       "are kept, and --clear")
+    s.add_argument("--clear", action="store_true", help="delete the cached programs and identify banks")
     s.set_defaults(func=cmd_cache)
     return s
 
