@@ -133,3 +133,13 @@ def test_cache_command_says_where_and_clears(tmp_path):
     assert f"compilation cache: {d}" in out and "cleared:" in out and not entries(d)
     assert "identify banks:" in out and "1 identify bank files deleted" in out     # issue 34: the bank too
     assert sorted(p.name for p in banks.iterdir()) == ["keep.txt"]
+
+
+def test_cache_command_names_an_unusable_folder(tmp_path):
+    """Issue 35: `bearingsim cache` with an unusable BEARINGSIM_CACHE_DIR said "off
+    (BEARINGSIM_CACHE_DIR=off)"; it names the folder and why."""
+    (tmp_path / "file").write_text("x")
+    bad = tmp_path / "file" / "cache"
+    code = "from bearingsim.app.cli import main; main(['cache']); main(['cache', '--clear'])"
+    out = " ".join(run({"BEARINGSIM_CACHE_DIR": str(bad)}, tmp_path, code))
+    assert f"compilation cache: {bad} cannot be used" in out and "=off)" not in out

@@ -243,8 +243,12 @@ def cmd_cache(args):
 
     d = runtime.configured_cache_dir()
     banks = sorted(bank_dir().glob("identify_bank_*"))
-    if d is None:
+    asked = runtime.cache_dir()
+    if d is None and asked is None:
         print("compilation cache: off (BEARINGSIM_CACHE_DIR=off): every run compiles")
+    elif d is None:
+        print(f"compilation cache: {asked} cannot be used (not a writable folder); every run compiles in "
+              "memory: set BEARINGSIM_CACHE_DIR to a writable folder")
     else:
         n, b = runtime.cache_size(d)
         kept, kb = runtime.cache_size(d / runtime.PROGRAMS_FOLDER)
