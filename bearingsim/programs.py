@@ -14,7 +14,9 @@ The key of a program is everything its trace depends on:
 * the package source (a hash of every ``bearingsim/**/*.py`` file) and the versions of Python,
   jax, jaxlib, equinox, diffrax, optimistix, lineax and NumPy; float64 on or off;
 * the platform it runs on (``cpu``, ``gpu``, ...);
-* the function (module, qualified name, its closure);
+* the function (module, qualified name, bytecode with its constants and names, its closure);
+  a function defined outside the package (a test's, a user's script's) keeps its program in
+  memory only: the globals it reads are in no hash;
 * every static argument (everything that is not an array, as :func:`equinox.filter_jit` splits
   them), by value: numbers, strings, enums, tuples, dicts, dataclasses, equinox modules' static
   fields, NumPy arrays by their bytes; an argument of a type it cannot describe exactly makes the
@@ -121,6 +123,11 @@ def program_dir() -> Path | None:
     return None if d is None else d / runtime.PROGRAMS_FOLDER
 
 
+#: set while a key is made when a function defined outside the package takes part: such a
+#: program is kept in memory only (a user's script may change a global it reads, which no key sees)
+_OUTSIDE = threading.local()
+
+
 class _Unkept(Exception):
     """A static argument whose value cannot be described exactly."""
 
@@ -149,11 +156,14 @@ def _canon(x, depth=0) -> str:
     if isinstance(x, functools.partial):
         return f"partial({_canon(x.func, depth + 1)},{_canon(x.args, depth + 1)},{_canon(x.keywords, depth + 1)})"
     if isinstance(x, types.FunctionType):
+        if not str(getattr(x, "__module__", "")).startswith("bearingsim"):
+            _OUTSIDE.flag = True        # its globals are not in the source hash: memory only
         cells = tuple(c.cell_contents for c in (x.__closure__ or ()))
-        code = x.__code__
-        return (f"F:{x.__module__}.{x.__qualname__}@{code.co_firstlineno}:"
-                f"{hashlib.sha256(code.co_code).hexdigest()[:12]}{_canon(cells, depth + 1)}"
+        return (f"F:{x.__module__}.{x.__qualname__}:{_canon(x.__code__, depth + 1)}{_canon(cells, depth + 1)}"
                 f"{_canon(x.__defaults__, depth + 1)}{_canon(x.__kwdefaults__, depth + 1)}")
+    if isinstance(x, types.CodeType):           # bytecode, constants (nested code too) and names
+        return (f"C@{x.co_firstlineno}:{hashlib.sha256(x.co_code).hexdigest()[:12]}"
+                f"{_canon(x.co_consts, depth + 1)}{_canon(x.co_names, depth + 1)}")
     if isinstance(x, (types.BuiltinFunctionType, np.ufunc)):
         return f"B:{getattr(x, '__module__', '')}.{x.__name__}"
     if isinstance(x, types.MethodType):
@@ -244,8 +254,10 @@ class KeptProgram:
             avals = tuple((tuple(np.shape(v)), str(v.dtype), bool(getattr(v, "weak_type", False)))
                           for v in dyn)
             dev = _device(dyn)
+            _OUTSIDE.flag = False
             desc = (f"{self._name}|{_canon(self._fun)}|{_canon_tree(tree)}|{_canon(static)}|{avals}|"
                     f"{dev.platform}|{_canon(compiler_options())}")
+            disk = not _OUTSIDE.flag
         except _Unkept:
             return self._jit(*args, **kwargs)
         key = hashlib.sha256(f"{source_hash()}|{desc}".encode()).hexdigest()[:32]
@@ -255,7 +267,7 @@ class KeptProgram:
             with self._lock:
                 prog = self._programs.get(mem)
                 if prog is None:
-                    prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals, dev) or False
+                    prog = self._load_or_trace(key, tree, is_dyn, static, dyn, avals, dev, disk) or False
                     self._programs[mem] = prog
         elif prog is not False:
             with _LOCK:
@@ -278,8 +290,8 @@ class KeptProgram:
             self._nested = eqx.filter_jit(self._fun)
         return self._nested(*args, **kwargs)
 
-    def _load_or_trace(self, key, tree, is_dyn, static, dyn, avals, dev):
-        d = program_dir()
+    def _load_or_trace(self, key, tree, is_dyn, static, dyn, avals, dev, disk=True):
+        d = program_dir() if disk else None
         path = None if d is None else d / f"{key}.jaxprog"
         if path is not None and path.is_file():
             try:
