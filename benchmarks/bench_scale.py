@@ -99,9 +99,6 @@ import bearingsim.datasets as dsm
 from bearingsim.case import load_case
 from bearingsim.datasets.distributed import DaskRunner
 
-def cheap_pits(shared, idx):
-    return np.full(idx.size, 1e-5), np.ones(idx.size, bool), np.full(idx.size, 0.5)
-
 def cheap_chunk(plan, k):
     idx = plan.items(k)
     T = int(round(plan.duration * plan.fs))
@@ -112,7 +109,7 @@ def cheap_chunk(plan, k):
 class Cheap:
     def __init__(self, r): self.r = r
     def imap(self, fn, shared, items):
-        fn = {{dsm.simulate_chunk: cheap_chunk, dsm.pit_depths_batch: cheap_pits}}[fn]
+        fn = {{dsm.simulate_chunk: cheap_chunk}}[fn]
         return self.r.imap(fn, shared, items)
 
 if __name__ == "__main__":

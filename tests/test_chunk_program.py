@@ -1,6 +1,7 @@
-"""A data set chunk as compiled device programs (issue 25, dynamics.chunk_program): the same
-physics as the host path of simulate_batch, two device programs per chunk and no implicit
-host transfer, and the Newton step count chosen per chunk by the per-item check."""
+"""A data set chunk as compiled device programs (issue 25, dynamics.chunk_program): every item
+equals ``simulate`` of its own settings and key (one engine, issue 32), two device programs per
+chunk and no implicit host transfer, and the Newton step count chosen per chunk by the
+per-item check."""
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -54,30 +55,31 @@ def program_run(setup):
     return prog, args, out
 
 
-def test_same_physics_as_the_host_path(setup, program_run):
-    """Without slip and fluctuation the motion is the same on both paths, so the device program
-    (motion, edges, stages and jumps built on the device, one scan over the record) and the host
-    path of simulate_batch (host stages and jumps per 1024 samples) integrate the same equations
-    with the same inputs: the sensor signals of the fault items agree to 1e-6 of their RMS (the
-    paths differ by round-off -- XLA's and NumPy's transcendentals, the filter's matrix
-    exponential, 1e-9 relative in its small entries -- which the contacts' switching amplifies
-    over the record: measured 1.3e-8), the healthy item's (a round-off-level signal, 6e-9 m/s^2
-    RMS) to 1e-9 of the fault items' RMS, the defect frequencies to 1e-12."""
+def test_an_item_is_simulate_of_its_key(setup, program_run):
+    """One engine: an item of the chunk (an inner-race pit, a ball pit; the outer pit with slip
+    on is test_an_item_rerun_alone_from_its_key) equals ``simulate`` of its own settings and
+    key: the same sensor signal to 1e-6 of its RMS (both solve the
+    balls in full with the chunk's Newton count; the paths differ by round-off -- the chunk
+    builds the whole record's stages in one program, simulate per 1024-sample chunk -- which the
+    contacts' switching amplifies over the record: measured ~1e-8) and the defect frequencies
+    to 1e-12."""
     s = setup
-    _, _, out = program_run
+    _, args, out = program_run
     it = out["ball_iterations"]
-    res = dyn.simulate_batch(s["b"], s["speed"], s["loads"], s["center"], s["extent"], s["depth"], "rectangular",
-                             s["params"], T / FS, FS, 0.0, location=s["loc"], slots=LOCATIONS,
-                             realism=dyn.Realism(), ball_iterations=it, substeps=1)
-    assert np.all(np.asarray(out["result"]) == 0) and np.all(res.result == 0)
-    a, b = np.asarray(out["sensor"]), res.sensor_acceleration
-    rms = np.sqrt(np.mean(b ** 2, axis=1))
-    assert np.all(rms > 0)
-    fault = s["depth"] > 0
-    assert np.max(np.abs(a - b)[fault] / rms[fault, None]) < 1e-6
-    assert np.max(np.abs(a - b)[~fault]) < 1e-9 * rms[fault].max()
-    np.testing.assert_allclose(np.asarray(out["bpfo_Hz"]), res.bpfo_Hz, rtol=1e-12)
-    np.testing.assert_allclose(np.asarray(out["bpfi_Hz"]), res.bpfi_Hz, rtol=1e-12)
+    n_knots = dyn.chunk_program(s["b"], samples=T, sample_rate=FS, max_speed_rpm=1800.0).n_knots
+    for i in (1, 2):
+        op = Operation.from_rpm(float(s["speed"][i]), "outer", True, True)
+        sp = Spall(float(s["center"][i]), float(s["extent"][i]), float(s["depth"][i]), "rectangular", str(s["loc"][i]), 0)
+        r = dyn.simulate(s["b"], op, jnp.asarray(s["loads"][i]), sp, s["params"], T / FS, FS, realism=dyn.Realism(),
+                         key=args[0][i], n_knots=n_knots, ball_iterations=it, substeps=1, record_balls=False,
+                         progress=False, ball_solver="full")
+        a = np.asarray(out["sensor"][i])
+        assert int(out["result"][i]) == 0 and r.result == 0
+        rms = np.sqrt(np.mean(r.sensor_acceleration ** 2))
+        assert rms > 0
+        assert np.max(np.abs(a - r.sensor_acceleration)) < 1e-6 * rms
+        for k in ("bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
+            assert float(out[k][i]) == pytest.approx(r.frequencies[k], rel=1e-12)
 
 
 def test_pass_times_padded(setup, program_run):
@@ -135,11 +137,11 @@ def test_menu():
 
 def test_pit_depths_inside_the_program(setup, program_run):
     """depth_rule "pit": the program's effective depth and unbridged fraction of each fault
-    item equal bearingsim.physics.pit's NumPy functions on its healthy state with ball 0 at the pit
+    item equal the NumPy oracle (tests/oracles/pit_numpy.py) on its healthy state with ball 0 at the pit
     (outer) or at azimuth 0 (inner, ball), solved on the host (1e-7: the Simpson weights, see
     tests/test_pit_device.py); healthy items get 0."""
     from bearingsim.physics.jones import solve
-    from bearingsim.physics.pit import pit_depth_of_solution, pit_unbridged_fraction
+    from oracles.pit_numpy import pit_depth_of_solution, pit_unbridged_fraction
 
     s = setup
     prog, args, _ = program_run
@@ -162,6 +164,11 @@ def test_pit_depths_inside_the_program(setup, program_run):
         assert got_u[i] == pytest.approx(u, rel=1e-9, abs=1e-12)
     # the defective states are solved with these depths
     assert np.all(np.asarray(prep["depth"]) == got_d)
+    # depth_rule "machined": the depths as given, the same unbridged fractions
+    kept = prog.prepare(*args[1:8], pit=(jnp.asarray(w), jnp.asarray(machined)), keep_depth=True)
+    np.testing.assert_array_equal(np.asarray(kept["depth"]), s["depth"])
+    np.testing.assert_array_equal(np.asarray(kept["unbridged"]), got_u)
+    assert np.all(np.asarray(kept["pit_ok"]))
 
 
 def test_item_keys_depend_on_seed_and_index_only():

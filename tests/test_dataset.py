@@ -284,45 +284,43 @@ def test_realism_labels(tmp_path):
 
 def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
     """depth_rule = "pit": each fault item enters the simulation with the effective depth of a
-    round EDM pit at its own speed and loads.  Items at the calibrated CWRU operating point
-    (1797 rpm, 100 N radial, 43.7 N axial) with the 0.007 and 0.021 in pits get the depths that
-    docs/calibrate_cwru.py wrote into cases/cwru_6205_or007.toml and cwru_6205.toml (stage B,
-    4 significant digits: rel 1e-3); the batched healthy solve of the data set and the single
-    solve of realism.pit_effective_depth are independent routes to the same contact.  The
-    machined rule keeps the drawn depth."""
+    round EDM pit at its own speed and loads, computed inside the chunk program.  Items at the
+    calibrated CWRU operating point (1797 rpm, 100 N radial, 43.7 N axial) with the 0.007 and
+    0.021 in pits get the depths that docs/calibrate_cwru.py wrote into
+    cases/cwru_6205_or007.toml and cwru_6205.toml (stage B, 4 significant digits: rel 1e-3); the
+    data set's batched healthy solve and the single solve of realism.pit_effective_depth are
+    independent routes to the same contact.  The unbridged fraction is 1 - 2b/w with b from the
+    single healthy solve (1e-9).  The machined rule keeps the drawn depth and takes the same
+    unbridged fractions (the pass variability's scale), also from inside the program."""
     import h5py
 
     from bearingsim.realism import rig_record as rl
-    from bearingsim.datasets import pit_depths, slots_of, draw_labels
     from bearingsim.app.workflows import dataset_case
 
     spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
-    for k, v in {"dataset.count": 2, "dataset.chunk": 2, "dataset.healthy_fraction": 0.0,
+    for k, v in {"dataset.count": 1, "dataset.chunk": 1, "dataset.healthy_fraction": 0.0,
                  "dataset.speed_rpm": [1797, 1797], "dataset.radial_N": [100, 100],
-                 "dataset.axial_N": [43.7, 43.7]}.items():
+                 "dataset.axial_N": [43.7, 43.7], "dataset.duration_s": 0.02,
+                 "dynamics.sample_rate_Hz": 12000}.items():
         spec = spec.with_value(k, v)
-    lab = draw_labels(spec)
-    lab["spall_length_mm"] = [0.007 * 25.4, 0.021 * 25.4]
-    depth, ok, unbridged = pit_depths(spec, lab, 2, slots_of(lab))
     want = [load_case(ROOT / "cases" / n).spall().depth for n in ("cwru_6205_or007.toml", "cwru_6205.toml")]
-    assert ok.all()
-    np.testing.assert_allclose(depth, np.asarray(want, float), rtol=1e-3)
-    # the unbridged fraction 1 - 2b/w of each pit, b from the single healthy solve's contact
     cal = load_case(ROOT / "cases" / "cwru_6205.toml")
     b = rl.contact_at(cal.bearing(), cal.operation(), cal.loads(), 0.0).b
-    w = np.array([0.007, 0.021]) * 25.4e-3
-    np.testing.assert_allclose(unbridged, 1.0 - 2.0 * b / w, rtol=1e-9)
-    # end to end: the labels carry the effective depth, below the machined 0.2794 mm
-    spec = spec.with_value("dataset.duration_s", 0.02).with_value("dynamics.sample_rate_Hz", 12000)
-    dataset_case(spec, tmp_path / "pit.h5")
-    with h5py.File(tmp_path / "pit.h5") as f:
-        L = f["labels"][()]
-    assert np.all(L["result"] == 0)
-    assert np.all((L["effective_depth_mm"] > 0) & (L["effective_depth_mm"] < 1e-2 * L["spall_depth_mm"]))
-    dataset_case(spec.with_value("dataset.depth_rule", "machined"), tmp_path / "machined.h5")
-    with h5py.File(tmp_path / "machined.h5") as f:
-        L = f["labels"][()]
-    assert np.array_equal(L["effective_depth_mm"], L["spall_depth_mm"])
+    for inch, depth in zip((0.007, 0.021), want):
+        mm = inch * 25.4
+        one = spec.with_value("dataset.spall_length_mm", [mm, mm])
+        labels = {}
+        for rule in ("pit", "machined"):
+            dataset_case(one.with_value("dataset.depth_rule", rule), tmp_path / f"{rule}.h5")
+            with h5py.File(tmp_path / f"{rule}.h5") as f:
+                labels[rule] = f["labels"][()]
+        P, M = labels["pit"], labels["machined"]
+        assert np.all(P["result"] == 0) and np.all(M["result"] == 0)
+        np.testing.assert_allclose(P["effective_depth_mm"] * 1e-3, depth, rtol=1e-3)
+        assert np.all(P["effective_depth_mm"] < 1e-2 * P["spall_depth_mm"])       # far below the machined 0.2794 mm
+        np.testing.assert_allclose(P["unbridged_fraction"], 1.0 - 2.0 * b / (mm * 1e-3), rtol=1e-9)
+        assert np.array_equal(M["effective_depth_mm"], M["spall_depth_mm"])
+        np.testing.assert_allclose(M["unbridged_fraction"], P["unbridged_fraction"], rtol=1e-12)
 
 
 def test_the_four_class_spec_is_domain_randomised():

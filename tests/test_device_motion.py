@@ -1,6 +1,8 @@
 """The drawn motion and the defect timings on the device (issue 25): the statistics of the JAX
 draws against the model's definition (and the host draws), and the device's edge / pass times,
-stage and jump arrays against independent NumPy computations on the same motion."""
+stage and jump arrays against independent NumPy computations on the same motion.  The NumPy
+draw of the same distributions is the oracle tests/oracles/motion_numpy.py (no longer in the
+package: one engine, issue 32)."""
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -10,6 +12,7 @@ from bearingsim import dynamics as dyn
 from bearingsim.signals import sensor
 from bearingsim.physics.defect import Spall
 from bearingsim.physics.geometry import Bearing
+from oracles.motion_numpy import draw_motion as numpy_draw_motion
 
 Z = 9
 FS = 48000.0
@@ -23,7 +26,7 @@ def bearing():
 def draws(n, realism, duration=0.1, omega_c=2 * np.pi * 11.9, omega0=2 * np.pi * 30.0, center=0.0):
     nk = dyn.knot_count(Z, omega_c / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100)
     keys = jax.random.split(jax.random.key(1), n)
-    f = jax.jit(jax.vmap(lambda k: dyn.draw_motion_device(k, Z, 0.0, omega_c, omega0, duration, center, realism, nk)))
+    f = jax.jit(jax.vmap(lambda k: dyn.draw_motion(k, Z, 0.0, omega_c, omega0, duration, center, realism, nk)))
     return f(keys), nk
 
 
@@ -88,14 +91,14 @@ def test_speed_fluctuation_rms_and_spectrum():
     f = np.asarray(m.fluct_freqs)
     assert f.min() > 0 and f.max() <= B
     assert abs(f.mean() / (B / 2) - 1) < 0.02
-    host = np.array([dyn.motion_at(dyn.draw_motion(s, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 30.0, 0.1, 0.0, realism),
+    host = np.array([dyn.motion_at(numpy_draw_motion(s, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 30.0, 0.1, 0.0, realism),
                                    np.asarray(t))[2] for s in range(600)]) / (2 * np.pi * 30.0) - 1.0
     assert abs(np.sqrt(np.mean(host ** 2)) / rms - 1) < 0.06
 
 
 def _host_motion(seed=3):
     realism = dyn.Realism(slip_percent=0.9, speed_fluctuation_percent=0.1)
-    return dyn.draw_motion(seed, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 29.95, 0.1, 0.0, realism)
+    return numpy_draw_motion(seed, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 29.95, 0.1, 0.0, realism)
 
 
 @pytest.mark.parametrize("location", ["outer", "inner", "ball"])
@@ -133,14 +136,14 @@ def test_stages_and_jumps_equal_host():
     m = _host_motion()
     md = dyn.device_motion_of(m)
     sub, T = 2, 700
-    st = np.asarray(dyn.stages_device(md, Z, 100, T, FS, "newmark", sub))
+    st = np.asarray(dyn.motion_stages(md, Z, 100, T, FS, "newmark", sub))
     t = (100 + np.arange(T)[:, None] + (np.arange(sub)[None, :] + 1.0) / sub) / FS     # Newmark: step ends
     ref = np.stack(dyn.motion_at(m, t), -1)
     np.testing.assert_allclose(st[:, :, 0, :], ref, rtol=1e-12, atol=1e-12)
     edges = dyn.defect_edge_times(m, Spall(0.0, 0.04, 1e-5, "rectangular", "outer", 0), 0.1)
     h = 1.0 / (sub * FS)
     pad = np.concatenate([edges, np.full(7, np.inf)])
-    j = np.asarray(dyn.jumps_device(jnp.asarray(pad), 100, T, sub, h))
+    j = np.asarray(dyn.edge_fractions(jnp.asarray(pad), 100, T, sub, h))
     t0 = (100 + np.arange(T))[:, None] * sub * h + np.arange(sub)[None, :] * h
     want = np.full(t0.shape, -1.0)
     for idx in np.ndindex(t0.shape):

@@ -170,6 +170,14 @@ def test_step_inside_a_step_is_exact():
     np.testing.assert_allclose(np.asarray(s), s_ref, rtol=1e-10, atol=1e-18)
 
 
+def key_motion(seed, Z, theta0, wc, w0, duration, center=0.0, realism=dyn.Realism()):
+    """The package's draw (from the key of item 0 of a run seeded ``seed``, as simulate draws it)
+    as a host Motion."""
+    nk = dyn.knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
+    dm = dyn.draw_motion(dyn.item_keys(seed, [0])[0], Z, theta0, wc, w0, duration, center, realism, nk)
+    return dyn.host_motion_of(dm, Z, seed)
+
+
 def jnp_float(x):
     import jax.numpy as jnp
     return jnp.float64(x)
@@ -181,19 +189,19 @@ def test_slip_jitters_the_pass_interval():
     Z, wc = 9, 75.0
     T = 2 * np.pi / Z / wc
     sp = bs.Spall(0.3, 0.02, 1e-4, "rectangular")
-    m = dyn.draw_motion(5, Z, 0.0, wc, 188.0, 30.0, float(sp.center), dyn.Realism(slip_percent=1.5))
+    m = key_motion(5, Z, 0.0, wc, 188.0, 30.0, float(sp.center), dyn.Realism(slip_percent=1.5))
     tp = dyn.spall_pass_times(m, sp, 30.0)
     d = np.diff(tp) / T
     assert d.size > 3000
     assert abs(d.mean() - 1.0) < 2e-3
     assert d.std() == pytest.approx(0.015, rel=0.06)
     assert np.corrcoef(d[:-1], d[1:])[0, 1] == pytest.approx(0.0, abs=0.06)    # independent
-    m0 = dyn.draw_motion(5, Z, 0.0, wc, 188.0, 1.0, float(sp.center))
+    m0 = key_motion(5, Z, 0.0, wc, 188.0, 1.0, float(sp.center))
     assert np.ptp(np.diff(dyn.spall_pass_times(m0, sp, 1.0))) < 1e-9
 
 
 def test_speed_fluctuation_and_noise_levels():
-    m = dyn.draw_motion(2, 9, 0.0, 75.0, 188.0, 20.0, 0.0, dyn.Realism(speed_fluctuation_percent=2.0,
+    m = key_motion(2, 9, 0.0, 75.0, 188.0, 20.0, 0.0, dyn.Realism(speed_fluctuation_percent=2.0,
                                                                         speed_fluctuation_bandwidth_Hz=4.0))
     t = np.linspace(0, 20, 200001)
     _, _, w = dyn.motion_at(m, t)

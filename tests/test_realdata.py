@@ -85,7 +85,10 @@ def test_reference_table_reproduced(label):
 
 
 # --------------------------------------------------------------------------- simulated vs real
-DURATION = 1.0          # s, simulated record; the real records are cut into segments this long
+DURATION = 1.0          # s, the segment length: real and simulated records are cut into segments this long
+SIM_SEGMENTS = 3        # simulated 1-s segments: both sides are the median over segments (one 1-s draw
+                        # of A3/A1 spreads by ~0.1 from draw to draw: seeds 2 of the NumPy and of the
+                        # key streams gave 0.459 and a pass at 0.021 in / 48 kHz against 0.306 real)
 SEED = 2                # not the calibration's draw (docs/calibrate_cwru.py fits with seed 1)
 SIM_CASES = {0.007: "cwru_6205_or007.toml", 0.021: "cwru_6205.toml"}
 # The two real 0.007 in records differ by x1.9 in level (130: 0.67 g at 12 kHz, 135: 1.26 g at
@@ -113,12 +116,12 @@ def simulated():
     out = {}
     for size, name in SIM_CASES.items():
         case = load_case(REPO / "cases" / name)
-        y, fs, res, _ = rl.simulate_record(case, duration=DURATION, sample_rate=48000.0, seed=SEED)
+        y, fs, res, _ = rl.simulate_record(case, duration=SIM_SEGMENTS * DURATION, sample_rate=48000.0, seed=SEED)
         y = y / cal.G
         shaft = res.frequencies["shaft_Hz"]
-        out[size, 48000] = record_metrics(y, fs, shaft, BPFO_ORDER)
+        out[size, 48000] = cal.segment_metrics(y, fs, shaft, DURATION)[0]
         y12, fs12 = rl.decimate_record(y, fs, 12000.0)
-        out[size, 12000] = record_metrics(y12, fs12, shaft, BPFO_ORDER)
+        out[size, 12000] = cal.segment_metrics(y12, fs12, shaft, DURATION)[0]
     return out
 
 
@@ -138,7 +141,8 @@ def _cases():
 def test_simulated_record_within_issue9_target(simulated, real_segments, size, fs, target):
     """Issue 9 targets (bearingsim.realism.calibration.TARGETS): BPFO order within 0.3 %, peak over
     median within +-8 dB, A2/A1 and A3/A1 within +-0.15, kurtosis and RMS within a factor 2;
-    real = median over the record's 1-s segments.  The 12 kHz records (130, 234) were used by
+    real and simulated = medians over the records' 1-s segments (equal length: the peak over
+    median grows with the length).  The 12 kHz records (130, 234) were used by
     the calibration, the 48 kHz ones (135, 238) were not."""
     sim, real = getattr(simulated[size, fs], target.field), getattr(real_segments[size, fs], target.field)
     assert target.check(sim, real), f"{target.label}: simulated {sim:.4g}, real {real:.4g}"

@@ -45,7 +45,7 @@ from ..names import lazy_exports
 #: every public name of the data set modules, by module: imported at first use (PEP 562), so that
 #: ``bearingsim.datasets.mldata`` (NumPy and h5py only) does not load JAX through this package
 _EXPORTS = {
-    'program': ('BACKGROUND_FIELDS', 'CHUNK_FIELDS', 'DEFAULT_MICRO_BATCH', 'MICRO_BATCH', 'Physics', 'chunk_keys', 'device_program', 'micro_batch', 'pit_depths', 'pit_depths_batch', 'plan_program', 'run_settings', 'simulate_chunk'),
+    'program': ('BACKGROUND_FIELDS', 'CHUNK_FIELDS', 'DEFAULT_MICRO_BATCH', 'MICRO_BATCH', 'Physics', 'chunk_keys', 'device_program', 'micro_batch', 'plan_program', 'run_settings', 'simulate_chunk'),
     'runner': ('BYTES_PER_SAMPLE', 'DEVICES', 'MAX_GPU_CHUNK', 'ChunkPlan', 'Interrupted', 'default_chunk', 'make_dataset', 'resolve_device', 'serial_imap', 'signal_settings'),
     'spec': ('CLASSES', 'FIELD_STREAMS', 'LABEL_DTYPE', 'LABEL_FIELDS', 'RANGES', 'SPLITS', 'DatasetResult', 'DatasetSummary', 'class_counts', 'class_of_index', 'defect_geometry', 'draw_labels', 'item_keys', 'item_locations', 'item_seeds', 'result_messages', 'settings', 'simulation_order', 'slots_of', 'transfer_paths'),
     'writer': ('CHUNK_FORMAT', 'COMPRESSIONS', 'DEFAULT_COMPRESSION', 'partial_path'),
@@ -54,7 +54,7 @@ __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 
 __all__ = ["ChunkPlan", "CHUNK_FIELDS", "BACKGROUND_FIELDS", "simulate_chunk", "device_program", "plan_program",
-           "serial_imap", "pit_depths", "pit_depths_batch", "run_settings", "Physics", "signal_settings",
+           "serial_imap", "run_settings", "Physics", "signal_settings",
            "micro_batch", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "chunk_keys", "CLASSES", "SPLITS", "RANGES", "FIELD_STREAMS", "LABEL_FIELDS",
            "LABEL_DTYPE", "DatasetResult", "DatasetSummary", "Interrupted", "draw_labels", "item_keys",
            "item_seeds", "class_counts", "class_of_index", "item_locations", "slots_of", "transfer_paths",

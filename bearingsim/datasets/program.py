@@ -12,9 +12,10 @@ device and takes the outputs back, both explicitly; it draws nothing and loops o
 Every program runs W items wide whatever the chunk size, so the bytes of an item do not depend
 on the chunk size or the worker count (on the same device type).
 
-Also here: :func:`run_settings` (the data set's substeps, fixed once) and :func:`pit_depths`,
-the host twin of the pit depths the chunk program computes (kept as a public helper, and for
-the pass variability of ``depth_rule = "machined"``).
+Also here: :func:`run_settings` (the data set's substeps, fixed once).  The pits' effective
+depths and unbridged fractions (``depth_rule = "pit"``, and the pass variability's scale under
+``depth_rule = "machined"``) are computed inside the chunk program, from each item's healthy
+contact: there is no host version.
 """
 from __future__ import annotations
 
@@ -24,12 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from .. import dynamics
 from ..case.units import from_si, to_si
 from .spec import DatasetResult, item_locations
 
 __all__ = ["CHUNK_FIELDS", "BACKGROUND_FIELDS", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "Physics", "micro_batch", "program_threads",
-           "chunk_keys", "plan_speed", "plan_program", "device_program", "simulate_chunk", "pit_depths", "pit_depths_batch",
+           "chunk_keys", "plan_speed", "plan_program", "device_program", "simulate_chunk",
            "run_settings"]
 
 BACKGROUND_FIELDS = ("background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
@@ -179,13 +181,12 @@ def _host_inputs(plan, pad):
                center=np.asarray(plan.center[pad], float), extent=np.asarray(plan.extent[pad], float),
                depth=np.asarray(plan.depth[pad], float), modes=tuple(np.ascontiguousarray(modes[..., j])
                                                                     for j in range(3)))
-    if plan.pit:
+    if plan.pit or plan.unbridged:
         sim["pit"] = (to_si(np.asarray(lab["spall_length_mm"], float), "mm"),
                       to_si(np.asarray(lab["spall_depth_mm"], float), "mm"))
     draws = ItemDraws(modes, np.asarray(lab["signal_gain"], float), np.asarray(lab["snr_dB"], float),
                       np.asarray(lab["strike_probability"], float), np.asarray(lab["spall_center_deg"], float))
-    sig = dict(fault_class=np.asarray(lab["fault_class"], np.int32), draws=draws,
-               unbridged=None if plan.unbridged is None else np.asarray(plan.unbridged[pad], float))
+    sig = dict(fault_class=np.asarray(lab["fault_class"], np.int32), draws=draws)
     return sim, sig
 
 
@@ -207,7 +208,7 @@ def device_program(plan, pad, threads=None):
     prog, (dev, params) = plan_program(plan)
     W = plan.width
     if pad.size % W:
-        raise ValueError(f"a chunk is a multiple of the micro-batch width {W}, got {pad.size} items")
+        raise InputError(f"device_program: a chunk is a multiple of the micro-batch width {W}, got {pad.size} items")
     sim, sig = _host_inputs(plan, pad)
 
     def micro(j):                               # one micro-batch: the same compiled programs for every j
@@ -215,8 +216,9 @@ def device_program(plan, pad, threads=None):
         s_in = jax.device_put(cut(sim), dev)
         g_in = jax.device_put(cut({k: v for k, v in sig.items() if v is not None}), dev)
         out = prog(s_in["keys"], s_in["speed_rpm"], s_in["loads"], s_in["theta0"], s_in["location"],
-                   s_in["center"], s_in["extent"], s_in["depth"], s_in["modes"], params, pit=s_in.get("pit"))
-        unb = g_in["unbridged"] if "unbridged" in g_in else out["unbridged"]
+                   s_in["center"], s_in["extent"], s_in["depth"], s_in["modes"], params, pit=s_in.get("pit"),
+                   keep_depth=not plan.pit)
+        unb = out["unbridged"]
         freqs = jax.numpy.stack([out[k] for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")], -1)
         x, lb = finish_items(s_in["keys"], out["housing_acceleration"], out["sensor"], out["pass_times"], unb,
                              g_in["fault_class"], out["shaft_Hz"], g_in["draws"], plan.signal, freqs)
@@ -247,13 +249,8 @@ def device_program(plan, pad, threads=None):
     for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
         v = np.asarray(cat(2, k), float)
         out[k] = np.where(np.isfinite(v) & ok, v, 0.0)
-    if plan.pit:
-        out["effective_depth_mm"] = from_si(np.asarray(cat(2, "pit_depth"), float), "mm")
-        out["unbridged_fraction"] = np.asarray(cat(2, "unbridged"), float)
-    else:
-        out["effective_depth_mm"] = from_si(np.asarray(plan.depth[pad], float), "mm")
-        out["unbridged_fraction"] = (np.zeros(pad.size) if plan.unbridged is None
-                                     else np.asarray(plan.unbridged[pad], float))
+    out["effective_depth_mm"] = from_si(np.asarray(cat(2, "pit_depth"), float), "mm")
+    out["unbridged_fraction"] = np.asarray(cat(2, "unbridged"), float)
     return out
 
 
@@ -279,76 +276,6 @@ def simulate_chunk(plan, k: int, threads=None) -> dict:
     with where:
         out = device_program(plan, pad) if threads is None else device_program(plan, pad, threads)
     return dict(index=idx, **{name: v[:m] for name, v in out.items()})
-
-
-def pit_depths(physics, lab, chunk, slots, profile=None, imap=None):
-    """(depth in m, ok, unbridged fraction) per item for ``[dataset] depth_rule = "pit"`` (and
-    for the pass-to-pass variability, which scales with the unbridged fraction of the item's
-    pit under the same contact, :func:`bearingsim.physics.pit.pit_unbridged_fraction`): every fault item's defect
-    is a round EDM pit of diameter ``spall_length_mm`` and machined depth ``spall_depth_mm``
-    narrower than the ball's contact ellipse, and the simulation takes the depth that loses the
-    same Hertz load (:func:`bearingsim.physics.pit.pit_depth_of_solution`: the ball keeps rolling on
-    the raceway beside the pit; the groove rule of the machined depth would let it drop by its
-    sag over the chord, ~w^2 / 4D, and its impacts grow with the square of the size).
-
-    ``physics``: a :class:`Physics` (or a case, whose physics is built).  Each item's healthy
-    contact at its own speed and loads comes from one batched quasi-static solve per ``chunk``
-    items (:func:`bearingsim.dynamics.quasi_static_batch` with depth-0 slots: the program the
-    simulation compiles anyway), with ball 0 at the pit for an outer-race pit and at the
-    load-zone centre (azimuth 0: the radial load is along +x) for an inner-race or ball pit.
-    ``ok`` is False where that state did not converge (the item is then flagged ``pit_contact``);
-    healthy items get 0 (depth and fraction).  ``imap`` runs the batches (in this process by
-    default; :mod:`bearingsim.datasets.distributed` on a Dask cluster): each is :func:`pit_depths_batch`
-    of the same items, so the numbers do not depend on where it ran."""
-    if not isinstance(physics, Physics):
-        physics = Physics.of_case(physics)
-    profile = physics.profile if profile is None else profile
-    n = lab.size
-    out, ok, unbridged = np.zeros(n), np.ones(n, bool), np.zeros(n)
-    faulty = np.flatnonzero(~lab["healthy"])
-    batches = [faulty[k:k + chunk] for k in range(0, faulty.size, chunk)]
-    run = imap or (lambda fn, shared, items: ((x, fn(shared, x)) for x in items))
-    for idx, (d, good, u) in run(pit_depths_batch, (physics, lab, chunk, slots, profile), batches):
-        out[idx], ok[idx], unbridged[idx] = d, good, u
-    return out, ok, unbridged
-
-
-def pit_depths_batch(shared, idx):
-    """(depth in m, ok, unbridged fraction) of the fault items ``idx`` (at most ``chunk``; padded
-    to ``chunk`` so that every batch is one program): one batch of :func:`pit_depths`; ``shared``
-    is ``(physics, lab, chunk, slots, profile)``."""
-    import jax
-    import jax.numpy as jnp
-
-    from ..physics.kinematics import Operation
-    from ..physics.pit import pit_depth_of_solution, pit_unbridged_fraction
-
-    ph, lab, chunk, slots, profile = shared
-    b = ph.bearing
-    loc = item_locations(lab)
-    w = to_si(lab["spall_length_mm"], "mm")
-    machined = to_si(lab["spall_depth_mm"], "mm")
-    center = to_si(lab["spall_center_deg"], "deg")
-    out, ok, unbridged = np.zeros(idx.size), np.ones(idx.size, bool), np.zeros(idx.size)
-    pad = np.concatenate([idx, np.repeat(idx[-1:], chunk - idx.size)])
-    m = pad.size
-    one = jnp.ones(m)
-    op = Operation(jnp.asarray(2 * np.pi * lab["speed_rpm"][pad] / 60.0), ph.control, one, one)
-    F = np.zeros((m, 5))
-    F[:, 0], F[:, 2] = lab["radial_N"][pad], lab["axial_N"][pad]
-    th = np.where(loc[pad] == "outer", center[pad], 0.0)
-    zero = np.zeros(m)
-    slots_h = dynamics.defect_slots(loc[pad], zero, zero, zero, profile, slots)
-    sols = dynamics.quasi_static_batch(b, op, jnp.asarray(F), jnp.asarray(th), slots_h, ph.hertz_method)
-    host = jax.tree_util.tree_map(np.asarray, sols)
-    for j, i in enumerate(idx):     # the integrator replaces this loop with the device pit depths (l1)
-        if int(host.result[j]) != 0:
-            ok[j] = False
-            continue
-        sol_j = jax.tree_util.tree_map(lambda a: a[j], host)
-        out[j] = pit_depth_of_solution(sol_j, b, 0, str(loc[i]), w[i], machined[i]).depth
-        unbridged[j] = pit_unbridged_fraction(sol_j, b, 0, str(loc[i]), w[i])
-    return out, ok, unbridged
 
 
 def run_settings(physics, lab, extent, depth, center, fs) -> int:

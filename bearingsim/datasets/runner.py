@@ -30,7 +30,7 @@ import numpy as np
 
 from ..case import check_sampling
 from ..errors import BearingsimError, InputError, SettingWarning
-from .program import CHUNK_FIELDS, Physics, micro_batch, pit_depths, program_threads, run_settings, simulate_chunk
+from .program import CHUNK_FIELDS, Physics, micro_batch, program_threads, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
 from .writer import (assemble, finished_chunks, open_partial, partial_path, read_chunk, spec_record, chunk_path,
@@ -79,7 +79,7 @@ def _signals_stop():
 
 def serial_imap(fn, shared, items):
     """``(item, fn(shared, item))`` for every item, in this process, in order: how the chunks of
-    a data set (and the batches of :func:`pit_depths`) run without a cluster.
+    a data set run without a cluster.
     :class:`bearingsim.datasets.distributed.DaskRunner` has the same ``imap`` on a Dask cluster."""
     for x in items:
         yield x, fn(shared, x)
@@ -174,7 +174,8 @@ class ChunkPlan:
     modes: np.ndarray               # (N, M, 3) every item's sensor modes (transfer_paths)
     signal: object                  # signal_stage.SignalSettings (static)
     pit: bool = False               # depth_rule "pit": the effective depths inside the chunk program
-    unbridged: np.ndarray = None    # depth_rule "machined" with pass variability: host pit_depths' fractions
+    unbridged: bool = False         # depth_rule "machined" with pass variability: the pits' unbridged fractions
+                                    # from their healthy contacts, inside the chunk program
     width: int = 16                 # micro-batch width W of every program call (program.micro_batch)
     device: str = None              # JAX platform ("cpu", "gpu"); None: the worker's default
     max_speed_rpm: float = None     # the spec's fastest speed: sizes the programs (None: the drawn items')
@@ -228,7 +229,7 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     ds = settings(case)
     check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
     o = case.data["operation"]
-    # simulate_batch uses the default centrifugal/gyroscopic flags of Operation
+    # the chunk program uses the default centrifugal/gyroscopic flags of Operation
     if not (o["centrifugal"] and o["gyroscopic"]):
         raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
                          "operation.gyroscopic true (the batch simulation always includes them)")
@@ -258,10 +259,7 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     try:
         with _signals_stop(), where:
             pit = ds.get("depth_rule", "machined") == "pit"
-            unbridged = None
-            if not pit and ph.realism.pass_variation:   # the host twin: the machined depth is simulated
-                _, pit_ok, unbridged = pit_depths(ph, lab, chunk, slots, imap=imap)
-                unbridged = np.where(pit_ok, unbridged, 0.0)
+            unbridged = not pit and bool(ph.realism.pass_variation)     # the machined depth is simulated
             lab["slip_percent"] = ph.realism.slip_percent
             lab["speed_fluctuation_percent"] = ph.realism.speed_fluctuation_percent
             lab["noise_rms_m_s2"] = ph.realism.noise_rms

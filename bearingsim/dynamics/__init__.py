@@ -9,9 +9,10 @@ exactly afterwards.  One concept per module:
                        the previous step's balls), and its step-count check
 ``model``              the shaft/housing equations, their equilibrium at t = 0, linear modes
 ``integrate``          fixed-step chunked time loop (and the adaptive diffrax reference)
+``frequencies``        the defect frequencies at a quasi-static state (one JAX version)
 ``simulate``           one simulation: :func:`simulate`, :class:`DynamicsResult`
 ``program``            a data set chunk as compiled device programs: :func:`chunk_program`
-``batch``              items in lockstep: :func:`simulate_batch` (one program for all classes)
+``batch``              what a chunk fixes before it runs: defect slots, bounding items, substeps
 =====================  ==========================================================================
 """
 # ---------------------------------------------------------------- parameters and results
@@ -19,7 +20,7 @@ from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 # ------------------------------------------------------------------------------ motion
 from .motion import (DeviceMotion, Motion, crossings_device, defect_edge_times, defect_pass_times, defect_phase,
-                     defect_times_device, device_motion_of, draw_motion, draw_motion_device, knot_count, motion_at,
+                     defect_times_device, device_motion_of, draw_motion, host_motion_of, knot_count, motion_at,
                      motion_at_device, motion_labels, motion_ok_device, pass_count, seed_streams)
 
 # --------------------------------------------------------------------------- ball forces
@@ -31,14 +32,14 @@ from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, B
 from .model import DynamicModel, build_model, choose_substeps, initial_state, linear_modes
 
 # --------------------------------------------------------------------------- integration
-from .integrate import CHUNK, SCHEMES, jumps_device, run_adaptive, run_fixed, stage_grid, stages_device, time_grid
+from .integrate import CHUNK, SCHEMES, edge_fractions, motion_stages, run_adaptive, run_fixed, stage_grid, time_grid
 
 # ------------------------------------------------------------------------- entry points
-from .simulate import (DynamicsResult, ball_records, characteristic_frequencies, load_zone_centre, simulate,
-                       simulate_case, spin_ratio, unbridged_of, vary_sensor)
+from .frequencies import characteristic_frequencies, spin_ratio, state_frequencies
+from .simulate import (DynamicsResult, ball_records, load_zone_centre, simulate, simulate_case, unbridged_of,
+                       vary_sensor)
 from .program import MENU, MOTION_STREAM, ChunkProgram, chunk_program, item_keys, iterations_needed, menu_iterations
-from .batch import (DynamicsBatchResult, batch_settings, defect_slots, extreme_items, quasi_static_batch,
-                    simulate_batch)
+from .batch import batch_settings, defect_slots, extreme_items
 
 #: former names (outer-spall era): the times a ball meets a defect's edges / centre
 spall_edge_times = defect_edge_times
@@ -52,12 +53,11 @@ __all__ = [
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
     "CHORD_TOL", "BallCarry", "initial_ball_carry", "bearing_force_chord",
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
-    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "stages_device", "jumps_device",
-    "DynamicsResult", "characteristic_frequencies", "spin_ratio", "ball_records", "simulate", "simulate_case",
+    "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "motion_stages", "edge_fractions",
+    "DynamicsResult", "characteristic_frequencies", "spin_ratio", "state_frequencies", "ball_records", "simulate", "simulate_case",
     "load_zone_centre", "unbridged_of", "vary_sensor",
-    "DynamicsBatchResult", "batch_settings", "defect_slots", "extreme_items", "quasi_static_batch",
-    "simulate_batch",
-    "DeviceMotion", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of", "knot_count",
+    "batch_settings", "defect_slots", "extreme_items",
+    "DeviceMotion", "motion_at_device", "motion_ok_device", "device_motion_of", "host_motion_of", "knot_count",
     "crossings_device", "defect_times_device", "pass_count",
     "MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
 ]

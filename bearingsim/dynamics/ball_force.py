@@ -23,6 +23,7 @@ from jax import lax
 
 from typing import NamedTuple
 
+from ..errors import InputError
 from ..physics.balls import (ball_balance, ball_state, contact_record, groove_centre_offsets, groove_centre_offsets_cs,
                      static_ball_position)
 from ..physics.defect import advance, as_defects, contact_depths
@@ -113,7 +114,8 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, ja
         n = max(int(iterations), 1)
     else:           # a traced count (one program for every count: the data engine's time loop)
         if record:
-            raise ValueError("a recorded ball solve needs a Python int count of Newton steps")
+            raise InputError("ball_iterations: a recorded ball solve needs a Python int count of Newton "
+                             f"steps, got {iterations!r}")
         n = jnp.maximum(jnp.asarray(iterations, jnp.int32), 1)
     if record:
         c, hist = lax.scan(newton, init, None, length=n)

@@ -2,8 +2,8 @@
 or the adaptive diffrax reference.
 
 Fixed steps ``h = 1 / (substeps * sample_rate)`` in a ``lax.scan`` over chunks of :data:`CHUNK`
-samples; the stage angles are precomputed per chunk (host, float64) and h is an array, so no
-duration, sample rate or chunk recompiles.  The default scheme ``"newmark"``: central difference
+samples; the stage angles are computed on the device from the drawn motion and h is an array,
+so no duration, sample rate or chunk recompiles.  The default scheme ``"newmark"``: central difference
 in x, trapezoidal in v for the (linear) damping -- one bearing-force evaluation per step, second
 order.  A ball crossing a rectangular defect edge inside a step (times known in advance from the
 motion, :func:`bearingsim.dynamics.defect_edge_times`) is integrated exactly: the force step
@@ -40,7 +40,7 @@ from .model import DynamicModel
 from .motion import Motion, device_motion_of, motion_at, motion_at_device
 
 __all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive",
-           "stage_grid", "stages_device", "jumps_device", "advance_record"]
+           "stage_grid", "motion_stages", "edge_fractions", "advance_record"]
 
 #: explicit Runge-Kutta schemes: (c, a, b)
 SCHEMES = {
@@ -136,8 +136,8 @@ def _advance_device(model, carry, m, edges, k0, h, flt, scheme, substeps, fs, re
     program from the :class:`DeviceMotion` ``m`` and the padded edge times (no host arrays per
     chunk)."""
     Z = model.bearing.n_balls
-    stages = stages_device(m, Z, k0, CHUNK, fs, scheme, substeps)
-    jumps = jumps_device(edges, k0, CHUNK, substeps, h)
+    stages = motion_stages(m, Z, k0, CHUNK, fs, scheme, substeps)
+    jumps = edge_fractions(edges, k0, CHUNK, substeps, h)
     return _advance(model, carry, stages, jumps, h, flt, scheme, record, chord)
 
 
@@ -148,39 +148,11 @@ def _pad_to(n, block=256):
     return block * (n // block + 1)
 
 
-def _advance_batch(model, carry, stages, jumps, h, flt, scheme):
-    return jax.vmap(lambda m, cr, st, jp, hh, fl: _advance(m, cr, st, jp, hh, fl, scheme))(
-        model, carry, stages, jumps, h, flt)
-
-
-_advance_batch_jit = jit(_advance_batch)
-
-
 def _stage_grid(scheme, substeps):
     c = SCHEMES[scheme][0]
     cs = np.array(sorted(set(c) - {0.0}))
     j = np.arange(substeps)
     return (j[:, None] + cs[None, :]) / substeps          # (S, n_c) in samples
-
-
-def _chunk_jumps(edges, k0, n, substeps, h):
-    """(n, S) fraction of each step at which a spall edge is crossed (-1: none)."""
-    steps = (np.arange(k0, k0 + n)[:, None] * substeps + np.arange(substeps)[None, :]).astype(float)
-    out = np.full(steps.shape, -1.0)
-    if len(edges):
-        t0 = steps * h
-        i = np.searchsorted(edges, t0.ravel(), side="left").reshape(steps.shape)
-        ok = i < len(edges)
-        te = np.where(ok, np.asarray(edges)[np.minimum(i, len(edges) - 1)], np.inf)
-        frac = (te - t0) / h
-        out = np.where(ok & (frac < 1.0), frac, -1.0)
-    return out
-
-
-def _chunk_stages(m: Motion, grid, k0, n, fs):
-    """Motion at the stage points of samples k0..k0+n-1: (n, S, n_c, 3)."""
-    t = (np.arange(k0, k0 + n, dtype=float)[:, None, None] + grid[None]) / fs
-    return np.stack(motion_at(m, t), axis=-1)
 
 
 def stage_grid(scheme, substeps):
@@ -189,18 +161,18 @@ def stage_grid(scheme, substeps):
     return _stage_grid(scheme, substeps)
 
 
-def stages_device(m, Z, k0, n, fs, scheme, substeps):
-    """:func:`_chunk_stages` on the device (jit/vmap): the motion of the :class:`DeviceMotion`
-    ``m`` at the stage points of samples k0..k0+n-1 (``n``, ``scheme``, ``substeps`` static;
+def motion_stages(m, Z, k0, n, fs, scheme, substeps):
+    """The motion of the :class:`DeviceMotion` ``m`` (cage angle, shaft angle, shaft speed) at
+    the stage points of samples k0..k0+n-1 (jit/vmap; ``n``, ``scheme``, ``substeps`` static;
     ``k0`` may be traced): (n, S, n_c, 3)."""
     grid = jnp.asarray(_stage_grid(scheme, substeps))
     t = (k0 + jnp.arange(n, dtype=jnp.float64)[:, None, None] + grid[None]) / fs
     return jnp.stack(motion_at_device(m, Z, t), axis=-1)
 
 
-def jumps_device(edges, k0, n, substeps, h):
-    """:func:`_chunk_jumps` on the device: (n, S) fraction of each step of samples k0..k0+n-1
-    at which a defect edge is crossed (-1: none); ``edges`` ascending, padded with +inf."""
+def edge_fractions(edges, k0, n, substeps, h):
+    """(n, S) fraction of each step of samples k0..k0+n-1 at which a defect edge is crossed
+    (-1: none; jit/vmap); ``edges`` ascending, padded with +inf."""
     steps = ((k0 + jnp.arange(n, dtype=jnp.float64))[:, None] * substeps
              + jnp.arange(substeps, dtype=jnp.float64)[None, :])
     t0 = steps * h
@@ -224,27 +196,24 @@ def time_grid(duration, sample_rate):
     return np.arange(n) / float(sample_rate)
 
 
-def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, progress, rec0=None,
-              ball_solver="full"):
-    """Chunked fixed-step integration of one model (batch=False) or a batch (motions and the
-    rectangular spall edge times ``edges`` lists).  Returns host arrays y (.., T, 10),
-    a_h (.., T, 2), sensor (.., T), the number of steps, with the balls' record at t = 0
-    ``rec0`` (RECORD_ROWS, Z) (one model only) the per-sample records (T, RECORD_ROWS, Z)
-    (else None), and the ball solver's counters (a dict: ``full_steps``, ``rejected_steps``,
-    ``worst_residual``; None without the chord method).
+def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, rec0=None, ball_solver="full"):
+    """Chunked fixed-step integration of one model: its ``motion`` (a host :class:`Motion`) and
+    the rectangular defects' edge times ``edges``; the stages and jumps of each chunk are built
+    on the device from the motion (the data set's chunk program builds them the same way, for
+    the whole record).  Returns host arrays y (T, 10), a_h (T, 2), sensor (T,), the number of
+    steps, with the balls' record at t = 0 ``rec0`` (RECORD_ROWS, Z) the per-sample records
+    (T, RECORD_ROWS, Z) (else None), and the ball solver's counters (a dict: ``full_steps``,
+    ``rejected_steps``, ``worst_residual``; None without the chord method).
 
     ``ball_solver``: "full" (every step from the closed form, :func:`bearing_force`) or "chord"
     (one model with the Newmark scheme only: the balls' positions carried from step to step,
     :func:`bearingsim.dynamics.bearing_force_chord`, a full solve at defect edges and wherever
     a chord step misses its tolerance)."""
     h = 1.0 / (substeps * fs)
-    grid = _stage_grid(scheme, substeps)
     f, z, g = model.params.modes()
-    flt = sensor_mod.sensor_filter(f, z, g, h)        # (items,) modes when batched
-    ms = motions if batch else [motions]
-    es = edges if batch else [edges]
-    record = rec0 is not None and not batch
-    chord = ball_solver == "chord" and scheme == "newmark" and not batch
+    flt = sensor_mod.sensor_filter(f, z, g, h)
+    record = rec0 is not None
+    chord = ball_solver == "chord" and scheme == "newmark"
     carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ()) + (
         (initial_ball_carry(model.bearing.n_balls),) if chord else ())
     outs = []
@@ -252,28 +221,19 @@ def run_fixed(model, y0, dy0, motions, edges, fs, T, scheme, substeps, batch, pr
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
-    if not batch:       # one model: the stages and jumps are built on the device, chunk by chunk
-        md = device_motion_of(motions, T / fs, 256)
-        e = np.asarray(edges, float)
-        edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
+    md = device_motion_of(motion, T / fs, 256)
+    e = np.asarray(edges, float)
+    edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):
         n = min(CHUNK, T - k0)
-        if batch:
-            stg = np.stack([_chunk_stages(m, grid, k0, CHUNK, fs) for m in ms])
-            jmp = np.stack([_chunk_jumps(e, k0, CHUNK, substeps, h) for e in es])
-            carry, out = _advance_batch_jit(model, carry, jnp.asarray(stg), jnp.asarray(jmp),
-                                            jnp.full(len(ms), h), flt, scheme)
-            outs.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:, :n], out))
-        else:
-            carry, out = _advance_device_jit(model, carry, md, edges_dev, jnp.float64(k0), jnp.float64(h), flt,
-                                             scheme, int(substeps), float(fs), record, chord)
-            outs.append(out)            # stays on the device until the end (no round trip per chunk)
-            if bar is not None:
-                jax.block_until_ready(carry[0])
+        carry, out = _advance_device_jit(model, carry, md, edges_dev, jnp.float64(k0), jnp.float64(h), flt,
+                                         scheme, int(substeps), float(fs), record, chord)
+        outs.append(out)            # stays on the device until the end (no round trip per chunk)
         if bar is not None:
+            jax.block_until_ready(carry[0])
             bar.update(n)
-    if not batch:           # fetched once, joined on the host (no device ops to compile)
-        outs = [jax.tree_util.tree_map(lambda *a: np.concatenate([np.asarray(x) for x in a], axis=0)[:T], *outs)]
+    # fetched once, joined on the host (no device ops to compile)
+    outs = [jax.tree_util.tree_map(lambda *a: np.concatenate([np.asarray(x) for x in a], axis=0)[:T], *outs)]
     if bar is not None:
         bar.close()
     y = np.concatenate([o[0] for o in outs], axis=-2)
@@ -306,7 +266,7 @@ def precompile_fixed(model, y0, motion, edges, fs, scheme, substeps, rec0=None, 
 
     def run():
         try:
-            run_fixed(model, y0, jnp.zeros_like(y0), motion, edges, fs, CHUNK, scheme, substeps, False, False,
+            run_fixed(model, y0, jnp.zeros_like(y0), motion, edges, fs, CHUNK, scheme, substeps, False,
                       None if rec0 is None else jnp.zeros_like(jnp.asarray(rec0)), ball_solver)
         except Exception:       # noqa: BLE001 -- the real run raises it
             pass

@@ -34,12 +34,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import InputError
 from ..physics.defect import as_defects
 from ..keys import STREAMS
 from .parameters import Realism
 
 __all__ = ["Motion", "seed_streams", "draw_motion", "motion_at", "defect_phase", "defect_edge_times", "DeviceMotion",
-           "knot_count", "MOTION_STREAM", "draw_motion_device", "motion_at_device", "motion_ok_device", "device_motion_of",
+           "knot_count", "MOTION_STREAM", "motion_at_device", "motion_ok_device", "device_motion_of",
            "crossings_device", "pass_count", "defect_times_device", "motion_labels_device", "host_motion_of",
            "defect_pass_times", "motion_labels", "FLUCTUATION_TERMS"]
 
@@ -48,7 +49,8 @@ FLUCTUATION_TERMS = 8
 
 
 class Motion(NamedTuple):
-    """One run's drawn cage and shaft motion (host arrays; see the module docstring)."""
+    """One run's drawn cage and shaft motion as host arrays (:func:`host_motion_of` of the drawn
+    :class:`DeviceMotion`; see the module docstring)."""
 
     theta0: float               # cage angle at t = 0 (rad)
     omega_c: float              # nominal cage speed (rad/s)
@@ -67,48 +69,6 @@ def seed_streams(seed):
     """The run's four random streams: slip forward, slip backward, speed, noise."""
     ss = np.random.SeedSequence(int(seed))
     return [np.random.default_rng(s) for s in ss.spawn(4)]     # slip+, slip-, speed, noise
-
-
-def draw_motion(seed, Z, theta0, omega_c, omega0, duration, spall_center=0.0,
-                realism: Realism = Realism()) -> Motion:
-    """Draw the cage and shaft motion of one run (reproducible from ``seed``; a longer run with
-    the same seed starts with the same draws)."""
-    r_fwd, r_bwd, r_speed, _ = seed_streams(seed)
-    a = float(realism.speed_fluctuation_percent) / 100.0
-    if a > 0.0:
-        K = FLUCTUATION_TERMS
-        f = r_speed.uniform(0.0, 1.0, K) * float(realism.speed_fluctuation_bandwidth_Hz)
-        f = np.maximum(f, 1e-3)
-        ph = r_speed.uniform(0.0, 2 * np.pi, K)
-    else:
-        f, ph = np.ones(1), np.zeros(1)
-    m = Motion(float(theta0), float(omega_c), float(omega0), int(Z), a, f, ph,
-               np.array([-1e12, 1e12]), np.array([-1e12, 1e12]), np.zeros(0), int(seed))
-    sigma = float(realism.slip_percent) / 100.0
-    if sigma <= 0.0 or omega_c <= 0.0:
-        return m
-    p0 = Z * float(spall_center) / (2 * np.pi)
-    tt = np.linspace(0.0, float(duration), 257)
-    u = _progress(m, tt, np)
-    lo, hi = float(u.min()) - 2.0, float(u.max()) + 2.0
-
-    def walk(rng, limit, sign):
-        steps = []
-        total = 0.0
-        while total < limit:
-            e = np.clip(rng.standard_normal(64) * sigma, -0.5, 0.5)
-            steps.append(e)
-            total += float(np.sum(1.0 + e))
-        e = np.concatenate(steps)
-        return e, sign * np.cumsum(1.0 + e)
-
-    e_f, U_f = walk(r_fwd, max(hi - p0, 0.0) + 2.0, 1.0)
-    e_b, U_b = walk(r_bwd, max(p0 - lo, 0.0) + 2.0, -1.0)
-    ku = np.concatenate([p0 + U_b[::-1], [p0], p0 + U_f])
-    kp = np.concatenate([p0 - np.arange(len(U_b), 0, -1), [p0], p0 + np.arange(1, len(U_f) + 1)])
-    inside = (ku[1:] > lo) & (ku[:-1] < hi)
-    eps = np.concatenate([e_b[::-1], e_f])[inside]
-    return m._replace(knots_u=ku, knots_p=kp.astype(float), slip_draws=eps)
 
 
 def _fluct(m: Motion, t, xp):
@@ -216,12 +176,13 @@ def motion_labels(m: Motion, realism: Realism) -> dict:
                 noise_band=(np.asarray(realism.noise_band, float) if realism.noise_band else np.zeros(0)))
 
 
-# ------------------------------------------------------------------- the same on the device
-# Every item of a data set draws its motion from its own ``jax.random`` key inside the chunk's
-# compiled program (vmap over items): no host work per item.  The statistics are those of
-# :func:`draw_motion` (same distributions, same walk), the random streams are JAX's.  Every
-# array has a fixed size (set by the duration and the fastest cage), so one program serves a
-# data set; what does not fit is flagged (:func:`motion_ok_device`), never cut silently.
+# ------------------------------------------------------------------- the draw, from a key
+# Every run draws its motion from its own ``jax.random`` key (a data set's item inside the
+# chunk's compiled program, vmap over items; one simulation from the key of its seed): no host
+# work per item.  Every array has a fixed size (set by the duration and the fastest cage), so
+# one program serves a data set; what does not fit is flagged (:func:`motion_ok_device`), never
+# cut silently.  The NumPy draw of the same distributions stays in the tests as an independent
+# oracle of the statistics (tests/oracles/motion_numpy.py).
 
 class DeviceMotion(NamedTuple):
     """One run's drawn motion as device arrays (a pytree; a leading item axis under vmap).  The
@@ -259,8 +220,8 @@ def knot_count(Z, max_cage_hz, duration, fluct=0.0):
     return int(math.ceil(2.0 * (span + 4.0))) + 2
 
 
-def draw_motion_device(key, Z, theta0, omega_c, omega0, duration, slip_center, realism: Realism, n_knots):
-    """:func:`draw_motion` on the device from a ``jax.random`` key (jit/vmap; ``Z``, ``realism``
+def draw_motion(key, Z, theta0, omega_c, omega0, duration, slip_center, realism: Realism, n_knots):
+    """One run's cage and shaft motion drawn from a ``jax.random`` key (jit/vmap; ``Z``, ``realism``
     and ``n_knots`` (:func:`knot_count`) static, the rest traced): speed fluctuation of
     :data:`FLUCTUATION_TERMS` random-phase sinusoids, frequencies uniform in (0, B]; the slip
     walk's pitches (1 + eps_k), eps_k ~ N(0, sigma^2) clipped to +-0.5, anchored where a ball is
@@ -335,9 +296,8 @@ def motion_ok_device(m: DeviceMotion, Z, duration):
 
 
 def device_motion_of(m: Motion, duration=None, block=None):
-    """A host :class:`Motion` (:func:`draw_motion`) as a :class:`DeviceMotion` (the same motion:
-    for comparing the device path with the host path on identical draws, and for one simulation's
-    time loop).  A run without slip gets exact whole-pitch knots over ``duration`` (s; required
+    """A host :class:`Motion` as a :class:`DeviceMotion` (the same motion: for one simulation's
+    time loop, and for a test's hand-made motion).  A run without slip gets exact whole-pitch knots over ``duration`` (s; required
     then).  The knots are padded by whole pitches beyond the last to a multiple of ``block``
     (default: none), so that runs of similar length share one program."""
     import jax.numpy as jnp
@@ -345,7 +305,7 @@ def device_motion_of(m: Motion, duration=None, block=None):
     ku, kp = np.asarray(m.knots_u, float), np.asarray(m.knots_p, float)
     if _no_slip(m):
         if duration is None:
-            raise ValueError("device_motion_of: a run without slip needs its duration")
+            raise InputError("device_motion_of: a run without slip needs its duration (s), got None")
         u = _progress(m, np.linspace(0.0, float(duration), 257), np)
         ku = kp = np.arange(np.floor(u.min()) - 4.0, np.ceil(u.max()) + 5.0)
     n = ku.size if block is None else int(block) * (ku.size // int(block) + 1)

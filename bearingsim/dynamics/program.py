@@ -13,7 +13,7 @@ and without a host round trip inside the record:
    :data:`ITER_TOL` for every item of the chunk (an explicit ``jax.device_get`` of a scalar).
 3. ``run`` (one program for every count of the menu: the count is a traced integer, the bound
    of the ball solver's Newton loop): per item the
-   motion from its key (:func:`bearingsim.dynamics.draw_motion_device`), the defect edge and
+   motion from its key (:func:`bearingsim.dynamics.draw_motion`), the defect edge and
    pass times as padded arrays, the model's equilibrium at t = 0, the sensor filter of its own
    modes, and the whole record's time loop (one ``lax.scan`` over the samples; the stage and
    jump arrays computed on the device).
@@ -37,37 +37,21 @@ from ..physics.defect import LOCATIONS, Spall
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import solve_state
 from ..keys import item_keys
-from ..physics.kinematics import Operation, defect_frequencies
-from ..physics.pit import pit_of_solution_device
+from ..physics.kinematics import Operation
+from ..physics.pit import pit_of_solution
 from ..programs import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
-from .integrate import advance_record, check_scheme, jumps_device, stages_device
+from .integrate import advance_record, check_scheme, edge_fractions, motion_stages
+from .frequencies import state_frequencies
 from .model import build_model, initial_state
-from .motion import (MOTION_STREAM, defect_times_device, draw_motion_device, knot_count, motion_at_device, motion_labels_device,
+from .motion import (MOTION_STREAM, defect_times_device, draw_motion, knot_count, motion_at_device, motion_labels_device,
                      motion_ok_device, pass_count)
 from .parameters import RESULTS, Realism
 
-__all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations",
-           "frequencies_device"]
+__all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations"]
 
 #: the Newton step counts a chunk's time loop may run (data to one compiled program)
 MENU = (1, 2, 4, 8, 16)
-
-
-def frequencies_device(bearing, speed, sol):
-    """:func:`bearingsim.dynamics.characteristic_frequencies` and :func:`spin_ratio` of one
-    state inside a program: (dict of Hz, mean loaded contact angle, spin ratio)."""
-    Qi = sol.Q_inner
-    top = jnp.max(Qi)
-    loaded = jnp.where(top > 0, Qi > 0.01 * top, True)
-    alpha = 0.5 * (sol.alpha_inner + sol.alpha_outer)
-    a_m = jnp.sum(alpha * loaded) / jnp.sum(loaded)
-    shaft = speed / (2 * np.pi)
-    f = defect_frequencies(bearing, shaft, a_m)
-    ftf = sol.cage_speed / (2 * np.pi)
-    k = defect_frequencies(bearing, 1.0, a_m).bsf
-    k = jnp.where(jnp.isfinite(k), k, 0.0)
-    return dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=f.bpfi, bsf_Hz=f.bsf), a_m, k
 
 
 def _slots(loc, center, extent, depth, profile, slots):
@@ -117,7 +101,7 @@ _merge_jit = jit(_merge)
 
 def _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, depth):
     n = op.speed.shape[0]
-    freqs, a_m, k = jax.vmap(lambda w, s: frequencies_device(bearing, w, s))(op.speed, sols)
+    freqs, a_m, k = jax.vmap(lambda w, s: state_frequencies(bearing, w, s))(op.speed, sols)
 
     # the ball solver's error per Newton step count (choose_ball_iterations, per item)
     code = jnp.zeros(n, jnp.int32)
@@ -140,12 +124,16 @@ _prepare_jit = jit(_prepare)
 
 
 def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile, slots, control,
-                    hertz_method, pit=None):
+                    hertz_method, pit=None, keep_depth=False):
     """The items' states and the ball check.  ``pit`` (pit diameter, machined depth) (N,) each,
-    or None: ``depth`` is then each fault item's effective pit depth
-    (:func:`bearingsim.physics.pit.pit_of_solution_device`) from its healthy state with ball 0 at the pit
-    (an outer pit) or at azimuth 0 (an inner or ball pit), solved first in the same program:
-    the two solves are one ``lax.scan`` of two passes, so the solve is traced once."""
+    or None: each fault item's pit is then put under its healthy contact, with ball 0 at the pit
+    (an outer pit) or at azimuth 0 (an inner or ball pit), solved first in the same program
+    (the two solves are one ``lax.scan`` of two passes, so the solve is traced once), which
+    gives its effective depth and unbridged fraction (:func:`bearingsim.physics.pit.pit_of_solution`).
+    The defective solve then takes the effective depth (``depth`` only marks the fault items:
+    > 0), or with ``keep_depth`` the ``depth`` given (depth_rule "machined": the unbridged
+    fraction is then only the pass-to-pass variability's scale, and an item whose healthy state
+    failed gets 0)."""
     if pit is None:
         op, defects, sols = _states(bearing, curve, speed_rpm, loads, theta0, loc, center, extent, depth, profile,
                                     slots, control, hertz_method, 1)
@@ -160,17 +148,18 @@ def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, exten
         d, th = carry
         op, defects, sols = _states(bearing, curve, speed_rpm, loads, th, loc, center, extent, d, profile, slots,
                                     control, hertz_method, 1)
-        dp, u = jax.vmap(lambda s_, L, ww, mm: pit_of_solution_device(s_, bearing, 0, L, ww, mm))(sols, loc, w, machined)
+        dp, u = jax.vmap(lambda s_, L, ww, mm: pit_of_solution(s_, bearing, 0, L, ww, mm))(sols, loc, w, machined)
         ok = sols.result == 0
         dp = jnp.where(fault & ok, dp, 0.0)
-        return (dp, theta0), (op, defects, sols, dp, jnp.where(fault & ok, u, 0.0), ok | ~fault)
+        nxt = jnp.where(fault, depth, 0.0) if keep_depth else dp
+        return (nxt, theta0), (op, defects, sols, dp, jnp.where(fault & ok, u, 0.0), ok | ~fault)
 
     _, (op, defects, sols, dp, u, ok) = lax.scan(one_pass, (jnp.zeros_like(depth), th_pit), None, length=2)
     take = lambda tree, k: jax.tree_util.tree_map(lambda a: a[k], tree)  # noqa: E731
     op, defects, sols = take(op, 1), take(defects, 1), take(sols, 1)
-    d_eff = dp[0]
+    d_eff = jnp.where(fault, depth, 0.0) if keep_depth else dp[0]
     out = _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, d_eff)
-    out.update(depth=d_eff, pit_depth=d_eff, unbridged=u[0], pit_ok=ok[0])
+    out.update(depth=d_eff, pit_depth=d_eff, unbridged=u[0], pit_ok=jnp.ones_like(ok[0]) if keep_depth else ok[0])
     return out
 
 
@@ -206,7 +195,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         model = build_model(bearing, o, F, sp, sol, p, curve, iterations, k)
         wc = jnp.where(jnp.isfinite(sol.cage_speed) & (sol.cage_speed > 0), sol.cage_speed, 0.0)
         centre = next((s.center for s in sp if s.location == "outer"), 0.0)
-        m = draw_motion_device(jax.random.fold_in(key, MOTION_STREAM), Z, th, wc, o.speed, (T - 1) / fs, centre, realism,
+        m = draw_motion(jax.random.fold_in(key, MOTION_STREAM), Z, th, wc, o.speed, (T - 1) / fs, centre, realism,
                                n_knots)
         st0 = jnp.stack(motion_at_device(m, Z, jnp.zeros(())), -1)
         y0, ok, dy0, _ = initial_state(model, sol.displacement[:3], st0)
@@ -218,8 +207,8 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         passes, p_ok = defect_times_device(m, Z, sp, k, (T - 1) / fs, P, ("mid",))
         passes = passes[:P]
         flt = sensor_mod.sensor_filter_device(fm, zm, gm, h)
-        stages = stages_device(m, Z, 0, T, fs, scheme, substeps)
-        jumps = jumps_device(edges, 0, T, substeps, h)
+        stages = motion_stages(m, Z, 0, T, fs, scheme, substeps)
+        jumps = edge_fractions(edges, 0, T, substeps, h)
         carry = (y0, dy0, jnp.zeros(fm.shape + (2,)))
         _, (ah, sens) = advance_record(model, carry, stages, jumps, h, flt, scheme, lean=True)
         code = jnp.where((sol.result != 0) | ~pit_ok, RESULTS.initial_state.value,
@@ -271,13 +260,13 @@ class ChunkProgram:
         self.calls = 0          # device programs launched (a test counts them)
         self._count = threading.Lock()      # micro-batches may run in threads
 
-    def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth, pit=None):
+    def prepare(self, speed_rpm, loads, theta0, location, center, extent, depth, pit=None, keep_depth=False):
         """The items' quasi-static states and the ball solver's check (device arrays).  Items
         whose state failed are solved again with 8 speed stages, all of them in a second
         program that runs (and compiles) only when a chunk has one: the host reads one bool."""
         args = (self.bearing, self.curve, speed_rpm, loads, theta0, location, center, extent, depth, self.profile,
                 self.slots, self.control, self.hertz_method)
-        prep = _states_prepare_jit(*args, pit)
+        prep = _states_prepare_jit(*args, pit, bool(keep_depth))
         args = args[:8] + (prep["depth"],) + args[9:]
         self._add(1)
         if bool(jax.device_get(prep["failed"])):      # rare: the second pass
@@ -302,7 +291,7 @@ class ChunkProgram:
                         self.profile)
 
     def __call__(self, keys, speed_rpm, loads, theta0, location, center, extent, depth, modes, params,
-                 iterations=None, pit=None):
+                 iterations=None, pit=None, keep_depth=False):
         """Simulate one chunk: ``keys`` (N, 2) uint32 (``jax.random`` keys, one per item),
         ``speed_rpm`` (N,), ``loads`` (N, 5) N / N m, ``theta0`` (N,) cage angle at t = 0 (rad),
         ``location`` (N,) int (index in :data:`bearingsim.physics.defect.LOCATIONS`), ``center``,
@@ -321,8 +310,10 @@ class ChunkProgram:
         ``pit``: None, or (pit diameter, machined depth) (N,) m each for ``depth_rule = "pit"``:
         every fault item's depth is then its pit's effective depth at its own healthy contact,
         computed in the same program (``depth`` only marks the fault items: > 0); an item whose
-        healthy state failed has ``pit_ok`` False and result ``initial_state``."""
-        prep = self.prepare(speed_rpm, loads, theta0, location, center, extent, depth, pit)
+        healthy state failed has ``pit_ok`` False and result ``initial_state``.  ``keep_depth``
+        (with ``pit``): simulate ``depth`` as given and take only the pits' unbridged fractions
+        from their healthy contacts (depth_rule "machined" with the pass-to-pass variability)."""
+        prep = self.prepare(speed_rpm, loads, theta0, location, center, extent, depth, pit, keep_depth)
         if iterations is None:
             iterations = menu_iterations([int(jax.device_get(prep["chunk_needed"]))])
         out = self.run(prep, keys, loads, theta0, modes, params, iterations)

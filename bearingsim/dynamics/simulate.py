@@ -20,49 +20,22 @@ from ..physics.defect import Spall, as_defects
 from ..errors import InputError
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import result_hint, solve
-from ..physics.kinematics import Operation, defect_frequencies
+from ..physics.kinematics import Operation
 from ..signals.passes import pass_variation
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
+from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
-from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, draw_motion_device, host_motion_of,
-                     knot_count, motion_at, motion_labels, seed_streams)
+from ..keys import item_keys
+from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, host_motion_of, knot_count,
+                     motion_at, motion_labels, seed_streams)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
-__all__ = ["DynamicsResult", "characteristic_frequencies", "spin_ratio", "slip_reference",
+__all__ = ["DynamicsResult", "slip_reference",
            "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "vary_sensor", "simulate",
            "simulate_case"]
-
-
-def characteristic_frequencies(bearing, op, sol):
-    """Defect frequencies (Hz) at the operating point: shaft = n/60; FTF = omega_c / 2 pi from
-    the quasi-static cage speed, BPFO = Z FTF; BPFI and BSF (once per ball revolution) from the
-    MODEL.md section 8 formulas at the mean loaded contact angle (mean of (alpha_i + alpha_o)/2
-    over the balls with Q_i > 1 % of the largest).  Returns (dict, contact angle in rad): floats
-    for one state, arrays for a batch (``sol`` and ``op.speed`` with a leading item axis)."""
-    Qi = np.asarray(sol.Q_inner)
-    top = Qi.max(axis=-1, keepdims=True)
-    loaded = np.where(top > 0, Qi > 0.01 * top, True)
-    alpha = 0.5 * (np.asarray(sol.alpha_inner) + np.asarray(sol.alpha_outer))
-    a_m = np.sum(alpha * loaded, axis=-1) / np.sum(loaded, axis=-1)
-    shaft = np.asarray(op.speed, float) / (2 * np.pi)
-    f = defect_frequencies(bearing, shaft, a_m)
-    ftf = np.asarray(sol.cage_speed, float) / (2 * np.pi)
-    out = dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=np.asarray(f.bpfi),
-               bsf_Hz=np.asarray(f.bsf))
-    if np.ndim(a_m) == 0:
-        return {k: float(v) for k, v in out.items()}, float(a_m)
-    return out, a_m
-
-
-def spin_ratio(bearing, contact_angle):
-    """omega_R / omega: a ball's spin speed relative to the cage per unit shaft speed (2 pi BSF
-    / omega, MODEL.md section 8) at the mean loaded contact angle (rad; a float or an array)."""
-    r = np.asarray(defect_frequencies(bearing, 1.0, contact_angle).bsf, float)
-    r = np.where(np.isfinite(r), r, 0.0)
-    return float(r) if r.ndim == 0 else r
 
 
 def slip_reference(defects):
@@ -207,7 +180,7 @@ def ball_records(model, rel, theta, phi, omega, iterations):
 
 
 def _draw_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots):
-    return draw_motion_device(jax.random.fold_in(key, MOTION_STREAM), Z, theta0, omega_c, omega0, duration, center,
+    return draw_motion(jax.random.fold_in(key, MOTION_STREAM), Z, theta0, omega_c, omega0, duration, center,
                               realism, n_knots)
 
 
@@ -246,9 +219,11 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     chord step misses its tolerance, :func:`bearingsim.dynamics.bearing_force_chord`; its
     counters in ``result.ball_solver_stats``) or "full" (every step from the closed form).
     ``key``: a ``jax.random`` key (raw (2,) uint32): the motion is drawn from it as a data set
-    chunk's program draws it (:func:`bearingsim.dynamics.draw_motion_device`, stream
-    ``MOTION_STREAM``; ``n_knots`` the program's ``n_knots``, default the count this run needs),
-    so one item of a chunk can be re-run alone; None: from ``seed`` (:func:`draw_motion`).
+    chunk's program draws it (:func:`bearingsim.dynamics.draw_motion`, stream ``MOTION_STREAM``;
+    ``n_knots`` the program's ``n_knots``, default the count this run needs), so one item of a
+    chunk can be re-run alone; None: the key of item 0 of a data set seeded ``seed``
+    (:func:`bearingsim.keys.item_keys`; issue 32 changed this random stream: a run's slip and
+    speed fluctuation draws are JAX's, no longer NumPy's).
     ``progress``: a tqdm bar (default: duration >= 1 s).  Raises
     :class:`DynamicsError` when the run fails and ``throw`` (else check ``result.result``).
     """
@@ -286,12 +261,9 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             ball_iterations = ITER_CHOICES[-1]
             code = code or RESULTS.ball_solver
     model = build_model(bearing, op, loads, defects, sol, params, curve, int(ball_iterations), k_spin)
-    if key is None:
-        m = draw_motion(seed, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
-                        slip_reference(defects), realism)
-    else:
-        m = _motion_from_key(key, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
-                             slip_reference(defects), realism, n_knots, seed)
+    key = item_keys(seed, [0])[0] if key is None else key
+    m = _motion_from_key(key, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
+                         slip_reference(defects), realism, n_knots, seed)
     st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
@@ -315,7 +287,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         recs = None
         if integrator == "fixed":
             y, ah, sens, nsteps, recs, solver_stats = run_fixed(model, y0, dy0, m, jumps, fs, T, scheme, substeps,
-                                                                False, progress, rec0 if record_balls else None,
+                                                                progress, rec0 if record_balls else None,
                                                                 ball_solver)
         else:
             y, ah, sens, nsteps = run_adaptive(model, y0, m, ts, jumps, rtol, atol, sensor_coupling)

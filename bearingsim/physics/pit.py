@@ -11,7 +11,13 @@ over the chord, ~ w^2 / (4 D)).  It keeps rolling on the raceway beside the pit 
 the Hertz pressure over the pit's area.  :func:`pit_effective_depth` turns that lost fraction
 phi of the ball load (at the ball's approach) into the depth the Jones model needs for the same
 load loss, ``H = delta_o (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5), capped by the sag and the
-machined depth.  Core: NumPy and the Jones solve; no files.
+machined depth.  Core: the Jones solve; no files.
+
+Every formula exists once, in JAX (:func:`load_fraction`, :func:`effective_depth`,
+:func:`unbridged`, :func:`pit_of_solution`: jit/vmap, for a data set chunk's program); the
+functions taking and returning floats (:func:`pit_load_fraction`, :func:`pit_depth`,
+:func:`unbridged_fraction`, ...) evaluate them for one contact.  The former NumPy versions are
+the tests' oracle (tests/oracles/pit_numpy.py).
 """
 from __future__ import annotations
 
@@ -19,14 +25,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
            "pit_depth", "pit_effective_depth", "pit_depth_of_solution", "unbridged_fraction",
-           "pit_unbridged_fraction", "pass_cv", "pit_load_fraction_device", "unbridged_fraction_device",
-           "pit_of_solution_device"]
+           "pit_unbridged_fraction", "pass_cv", "load_fraction", "effective_depth", "unbridged", "pit_of_solution"]
 
 # ------------------------------------------------------------------------------ pit physics
 def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
-    """Fraction of a Hertz contact's load carried over a round pit.
+    """Fraction of a Hertz contact's load carried over a round pit (:func:`load_fraction` of one
+    contact, as a float).
 
     ``a`` semi-axis across the track, ``b`` along it, ``pit_diameter`` and ``offset`` (the
     distance across the track from the contact centre to the pit centre) in the same unit.  The
@@ -35,20 +43,10 @@ def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
     Limits: 1 for a pit that covers the contact, ``3 r^2 / (2 a b)`` for a centred pit of radius
     r << b.
     """
-    from scipy.integrate import simpson
-
-    a, b, r, e = float(a), float(b), 0.5 * float(pit_diameter), abs(float(offset))
-    if not (a > 0 and b > 0 and r >= 0):
-        raise ValueError(f"need a, b > 0 and pit_diameter >= 0, got {a}, {b}, {pit_diameter}")
-    lo, hi = max(e - r, -a), min(e + r, a)
-    if r == 0.0 or lo >= hi:
-        return 0.0
-    x = np.linspace(lo, hi, n | 1)
-    c = b * np.sqrt(np.clip(1.0 - (x / a) ** 2, 0.0, None))                 # ellipse half-chord
-    y0 = np.minimum(np.sqrt(np.clip(r * r - (x - e) ** 2, 0.0, None)), c)    # disc within it
-    ratio = np.divide(y0, c, out=np.zeros_like(c), where=c > 0)
-    inner = y0 * np.sqrt(np.clip(c * c - y0 * y0, 0.0, None)) + c * c * np.arcsin(np.clip(ratio, 0, 1))
-    return float(min(1.0, simpson(inner / b, x=x) / (2.0 / 3.0 * np.pi * a * b)))
+    if not (float(a) > 0 and float(b) > 0 and float(pit_diameter) >= 0):
+        raise InputError(f"pit_load_fraction: need the contact semi-axes a, b > 0 (m) and pit_diameter >= 0 (m), "
+                         f"got a = {a}, b = {b}, pit_diameter = {pit_diameter}")
+    return float(load_fraction(float(a), float(b), float(pit_diameter), float(offset), int(n)))
 
 
 class Contact(NamedTuple):
@@ -72,7 +70,7 @@ def contact_of(sol, bearing, j, race="outer", centred=False) -> Contact:
     groove bottom, ``f D |sin alpha|`` (0 with ``centred``: a pit on the ball, which meets the
     contact on the ball's rolling circle)."""
     if race not in ("outer", "inner"):
-        raise ValueError(f"race must be 'outer' or 'inner', got {race!r}")
+        raise InputError(f"race must be 'outer' or 'inner', got {race!r}")
     get = lambda name: float(np.asarray(getattr(sol, f"{name}_{race}"))[j])  # noqa: E731
     alpha = get("alpha")
     f = float(bearing.f_outer if race == "outer" else bearing.f_inner)
@@ -100,16 +98,15 @@ class PitDepth(NamedTuple):
 
 
 def pit_depth(contact: Contact, pit_diameter, machined_depth, ball_diameter) -> PitDepth:
-    """Effective depth of a round pit of ``pit_diameter`` (m) under the healthy ``contact``:
-    the pit removes the fraction phi of the contact's load (:func:`pit_load_fraction`, the pit
-    ``contact.offset`` away from the contact centre across the track) at its approach, which the
-    Jones model reproduces with the depth ``delta (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5),
-    capped by the ball's sag over the pit chord and by the machined depth."""
+    """Effective depth of a round pit of ``pit_diameter`` (m) under the healthy ``contact``
+    (:func:`effective_depth`): the pit removes the fraction phi of the contact's load
+    (:func:`pit_load_fraction`, the pit ``contact.offset`` away from the contact centre across
+    the track) at its approach, which the Jones model reproduces with the depth
+    ``delta (1 - (1 - phi)^(2/3))`` (Q ~ delta^1.5), capped by the ball's sag over the pit chord
+    and by the machined depth."""
     D, w = float(ball_diameter), float(pit_diameter)
-    sag = 0.5 * D - np.sqrt(max(0.0, 0.25 * D * D - 0.25 * w * w))
-    phi = min(1.0, pit_load_fraction(contact.a, contact.b, w, contact.offset)) if contact.a > 0 else 0.0
-    h = max(contact.delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
-    return PitDepth(float(min(h, sag, float(machined_depth))), phi, float(sag), contact)
+    h, phi, sag = effective_depth((contact.delta, contact.a, contact.b, contact.offset), w, float(machined_depth), D)
+    return PitDepth(float(h), float(phi), float(sag), contact)
 
 
 def pit_effective_depth(bearing, op, loads, pit_diameter, machined_depth, center=0.0,
@@ -133,7 +130,7 @@ def pit_effective_depth(bearing, op, loads, pit_diameter, machined_depth, center
     from .jones import solve
 
     if location not in PIT_LOCATIONS:
-        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+        raise InputError(f"pit location must be one of {PIT_LOCATIONS}, got {location!r}")
     sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
     psi = np.asarray(sol.azimuth)
     j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
@@ -147,7 +144,7 @@ def pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_dept
     if location in ("outer", "inner"):
         return pit_depth(contact_of(sol, bearing, j, location), pit_diameter, machined_depth, D)
     if location != "ball":
-        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+        raise InputError(f"pit location must be one of {PIT_LOCATIONS}, got {location!r}")
     po = pit_depth(contact_of(sol, bearing, j, "outer", centred=True), pit_diameter, machined_depth, D)
     pi = pit_depth(contact_of(sol, bearing, j, "inner", centred=True), pit_diameter, machined_depth, D)
     return PitDepth(0.5 * (po.depth + pi.depth), 0.5 * (po.load_fraction + pi.load_fraction), po.sag,
@@ -157,9 +154,8 @@ def pit_depth_of_solution(sol, bearing, j, location, pit_diameter, machined_dept
 # ------------------------------------------------------------------------------ variability
 def unbridged_fraction(pit_diameter, contact_semi_axis_b) -> float:
     """``max(0, 1 - 2 b / w)``: the fraction of the pit length ``w`` that the contact (length 2b)
-    cannot bridge, i.e. over which its central strip runs free."""
-    w, b = float(pit_diameter), float(contact_semi_axis_b)
-    return max(0.0, 1.0 - 2.0 * b / w) if w > 0.0 else 0.0
+    cannot bridge, i.e. over which its central strip runs free (:func:`unbridged`, a float)."""
+    return float(unbridged(float(pit_diameter), float(contact_semi_axis_b)))
 
 
 def pit_unbridged_fraction(sol, bearing, j, location, pit_length) -> float:
@@ -170,7 +166,7 @@ def pit_unbridged_fraction(sol, bearing, j, location, pit_length) -> float:
     if location in ("outer", "inner"):
         return unbridged_fraction(pit_length, contact_of(sol, bearing, j, location).b)
     if location != "ball":
-        raise ValueError(f"location must be one of {PIT_LOCATIONS}, got {location!r}")
+        raise InputError(f"pit location must be one of {PIT_LOCATIONS}, got {location!r}")
     return 0.5 * sum(unbridged_fraction(pit_length, contact_of(sol, bearing, j, r, centred=True).b)
                      for r in ("outer", "inner"))
 
@@ -181,12 +177,14 @@ def pass_cv(pit_diameter, contact_semi_axis_b, cv_max) -> float:
     return float(cv_max) * unbridged_fraction(pit_diameter, contact_semi_axis_b)
 
 
-# ------------------------------------------------------------------------ the same in JAX
-# For a data set chunk's compiled program (traced arrays, vmap over items): the same formulas
-# as above, the Simpson rule on the same n points.
+# ------------------------------------------------------------------------ the formulas (JAX)
+# One version, for one contact on the host and for a data set chunk's compiled program (traced
+# arrays, vmap over items).
 
-def pit_load_fraction_device(a, b, pit_diameter, offset=0.0, n=2001):
-    """:func:`pit_load_fraction` as a JAX function (jit/vmap; ``n`` static)."""
+def load_fraction(a, b, pit_diameter, offset=0.0, n=2001):
+    """Fraction of a Hertz contact's load carried over a round pit (:func:`pit_load_fraction`;
+    jit/vmap, ``n`` static): the composite Simpson rule on ``n`` uniform points across the
+    track; 0 for an empty pit, a pit beside the contact or a contact of zero size."""
     import jax.numpy as jnp
 
     n = n | 1
@@ -206,7 +204,7 @@ def pit_load_fraction_device(a, b, pit_diameter, offset=0.0, n=2001):
     return jnp.where(valid, jnp.minimum(1.0, integral / (2.0 / 3.0 * np.pi * a_ * b_)), 0.0)
 
 
-def _contact_device(sol, bearing, j, race, centred):
+def _contact(sol, bearing, j, race, centred):
     import jax.numpy as jnp
 
     get = lambda name: getattr(sol, f"{name}_{race}")[j]  # noqa: E731
@@ -216,25 +214,28 @@ def _contact_device(sol, bearing, j, race, centred):
     return get("delta"), get("a"), get("b"), offset
 
 
-def _depth_device(contact, w, machined, D):
+def effective_depth(contact, w, machined, D):
+    """(effective depth, lost load fraction phi, sag) of a round pit of diameter ``w`` under a
+    contact ``(delta, a, b, offset)`` (:func:`pit_depth`; jit/vmap): ``delta (1 - (1 -
+    phi)^(2/3))``, capped by the ball's sag over the pit chord and the ``machined`` depth."""
     import jax.numpy as jnp
 
     delta, a, b, offset = contact
     sag = 0.5 * D - jnp.sqrt(jnp.maximum(0.0, 0.25 * D * D - 0.25 * w * w))
-    phi = jnp.where(a > 0, jnp.minimum(1.0, pit_load_fraction_device(a, b, w, offset)), 0.0)
+    phi = jnp.where(a > 0, jnp.minimum(1.0, load_fraction(a, b, w, offset)), 0.0)
     h = jnp.maximum(delta, 0.0) * (1.0 - (1.0 - phi) ** (2.0 / 3.0))
-    return jnp.minimum(jnp.minimum(h, sag), machined)
+    return jnp.minimum(jnp.minimum(h, sag), machined), phi, sag
 
 
-def unbridged_fraction_device(pit_diameter, contact_semi_axis_b):
-    """:func:`unbridged_fraction` as a JAX function."""
+def unbridged(pit_diameter, contact_semi_axis_b):
+    """``max(0, 1 - 2 b / w)`` (:func:`unbridged_fraction`; jit/vmap; 0 for w = 0)."""
     import jax.numpy as jnp
 
     w = jnp.asarray(pit_diameter, jnp.float64)
     return jnp.where(w > 0.0, jnp.maximum(0.0, 1.0 - 2.0 * contact_semi_axis_b / jnp.where(w > 0, w, 1.0)), 0.0)
 
 
-def pit_of_solution_device(sol, bearing, j, location, pit_diameter, machined_depth):
+def pit_of_solution(sol, bearing, j, location, pit_diameter, machined_depth):
     """(effective depth, unbridged fraction) of :func:`pit_depth_of_solution` and
     :func:`pit_unbridged_fraction` for ball ``j`` of one healthy quasi-static state ``sol``
     (JAX arrays, jit/vmap); ``location`` an index into :data:`PIT_LOCATIONS` (traced: every
@@ -243,11 +244,11 @@ def pit_of_solution_device(sol, bearing, j, location, pit_diameter, machined_dep
 
     D = bearing.ball_diameter
     w, m = jnp.asarray(pit_diameter, jnp.float64), jnp.asarray(machined_depth, jnp.float64)
-    co, ci = _contact_device(sol, bearing, j, "outer", False), _contact_device(sol, bearing, j, "inner", False)
-    cbo, cbi = _contact_device(sol, bearing, j, "outer", True), _contact_device(sol, bearing, j, "inner", True)
-    d_o, d_i = _depth_device(co, w, m, D), _depth_device(ci, w, m, D)
-    d_b = 0.5 * (_depth_device(cbo, w, m, D) + _depth_device(cbi, w, m, D))
-    u_o, u_i = unbridged_fraction_device(w, co[2]), unbridged_fraction_device(w, ci[2])
+    co, ci = _contact(sol, bearing, j, "outer", False), _contact(sol, bearing, j, "inner", False)
+    cbo, cbi = _contact(sol, bearing, j, "outer", True), _contact(sol, bearing, j, "inner", True)
+    d_o, d_i = effective_depth(co, w, m, D)[0], effective_depth(ci, w, m, D)[0]
+    d_b = 0.5 * (effective_depth(cbo, w, m, D)[0] + effective_depth(cbi, w, m, D)[0])
+    u_o, u_i = unbridged(w, co[2]), unbridged(w, ci[2])
     depth = jnp.where(location == 0, d_o, jnp.where(location == 1, d_i, d_b))
-    unbridged = jnp.where(location == 0, u_o, jnp.where(location == 1, u_i, 0.5 * (u_o + u_i)))
-    return depth, unbridged
+    u = jnp.where(location == 0, u_o, jnp.where(location == 1, u_i, 0.5 * (u_o + u_i)))
+    return depth, u
