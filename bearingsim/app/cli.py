@@ -1,4 +1,4 @@
-"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|identify|cache|demo``.
+"""Command line: ``bearingsim info|static|sweep|study|simulate|spectrum|compare|dataset|calibrate|identify|rotor|cache|demo``.
 
 Argument parsing, printing and exit codes only: the work is done by :mod:`bearingsim.app.workflows`,
 files are written by :mod:`bearingsim.output.io`, figures drawn by :mod:`bearingsim.output.plots`.  Exit codes
@@ -55,7 +55,18 @@ def _numpy():
     return m
 
 
+def _rotor():
+    from . import rotor as m
+    return m
+
+
+def _rotordynamics():
+    from . import rotordynamics as m
+    return m
+
+
 np, io, report, workflows = _Lazy(_numpy), _Lazy(_io), _Lazy(_report), _Lazy(_workflows)
+rotordynamics, rotor = _Lazy(_rotordynamics), _Lazy(_rotor)
 
 
 def load_case(*args, **kwargs):
@@ -408,6 +419,16 @@ def cmd_compare(args):
     return 0
 
 
+def cmd_rotor(args):
+    """``bearingsim rotor CASE``: a ROSS rotor on the case's bearing (or set) at both ends, its
+    Campbell diagram and critical speeds (bearingsim.app.rotordynamics; needs the ross extra)."""
+    speeds = rotordynamics.parse_speeds(args.speeds_rpm) if args.speeds_rpm else None
+    rotordynamics.require_ross()                  # before any work: the one message how to install it
+    case = load_case(args.case)
+    _wrote(*rotor.rotor_command(case, args.out, speeds, say=print))
+    return 0
+
+
 def cmd_demo(args):
     case = load_case(args.case or "demo")
     out = Path(args.out)
@@ -531,6 +552,12 @@ def build_parser():
              "sweep (Jones model, no inertia) against the dynamic simulation's as the balls pass the spall, "
              "and the dynamic amplification",
              plot=("DIR", "write compare.png into DIR"))
+    s = _command(sub, "rotor", cmd_rotor, "a small steel rotor (ROSS) on the case's bearing or set at both "
+                 "ends: Campbell diagram and critical speeds (pip install 'bearingsim[ross]')")
+    s.add_argument("--out", default="results/rotor", metavar="DIR", help="write campbell.png and "
+                   "critical_speeds.json into DIR (default results/rotor)")
+    s.add_argument("--speeds-rpm", metavar="START:STOP:COUNT", help="rotor speeds in rpm (default "
+                   "0:1.5 x the case's speed:16)")
     _cache_parser(sub)
     s = _command(sub, "demo", cmd_demo, "run the default case end to end and write all results and plots",
                  positional=None)
