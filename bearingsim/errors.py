@@ -10,6 +10,7 @@
   kind                   exit meaning
   ====================== ==== ==================================================
   :class:`InputError`       2 a case file, key, value or argument is wrong
+                              (:class:`InputTypeError`: of the wrong type)
   :class:`NotConvergedError` 3 a solve did not converge
   :class:`InvalidStateError` 3 a solve ended on a state that is not physical
   :class:`OutputError`      4 a result could not be written (or was not finite)
@@ -28,6 +29,7 @@ __all__ = [
     "ResultCode",
     "BearingsimError",
     "InputError",
+    "InputTypeError",
     "NotConvergedError",
     "InvalidStateError",
     "OutputError",
@@ -70,6 +72,13 @@ class BearingsimError(Exception):
 
 class InputError(BearingsimError, ValueError):
     """Bad input: a case file, key, value or argument (exit code 2)."""
+
+    exit_code = 2
+
+
+class InputTypeError(InputError, TypeError):
+    """A wrong type of an input (exit code 2): both a ValueError and a TypeError, so callers
+    catching either keep working."""
 
     exit_code = 2
 

@@ -294,17 +294,18 @@ class KeptProgram:
         d = program_dir() if disk else None
         path = None if d is None else d / f"{key}.jaxprog"
         if path is not None and path.is_file():
+            why = "another format"          # a file of another bearingsim/JAX version
             try:
                 blob = pickle.loads(path.read_bytes())
-                if blob.get("format") != FORMAT:
-                    raise ValueError("another format")
-                exp = jax.export.deserialize(bytearray(blob["exported"]))
-                with _LOCK:
-                    COUNTS["loaded"] += 1
-                return self._callable(exp, dev), blob["template"]
+                if blob.get("format") == FORMAT:
+                    exp = jax.export.deserialize(bytearray(blob["exported"]))
+                    with _LOCK:
+                        COUNTS["loaded"] += 1
+                    return self._callable(exp, dev), blob["template"]
             except Exception as e:      # noqa: BLE001 - any unreadable file is traced again
-                print(f"bearingsim: kept program {path.name} of {self._name} unreadable ({type(e).__name__}); "
-                      "tracing it again", file=sys.stderr)
+                why = type(e).__name__
+            print(f"bearingsim: kept program {path.name} of {self._name} unreadable ({why}); "
+                  "tracing it again", file=sys.stderr)
         holder = {}
 
         def flat_fun(*dyn_in):       # named after the function below (the exported module's name)

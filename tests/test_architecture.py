@@ -259,3 +259,48 @@ def test_the_newton_machinery_lives_in_one_module():
     for user in ("jones", "shaft"):
         assert ("bearingsim.physics.newton" in {t for _, t, _ in imports(PACKAGE / "physics" / f"{user}.py",
                                                                          f"bearingsim.physics.{user}")})
+
+
+#: converted by the engine work of issue 32/33; remove when empty.  Files (patterns relative to
+#: bearingsim/) that may still raise a bare ValueError / TypeError; everything else raises the
+#: project's own errors (bearingsim.errors: InputError, InputTypeError, ...).
+NOT_YET_CONVERTED = {"signals/plain_features.py"}
+
+
+def bare_raises(path: Path):
+    """(line, name) of every ``raise ValueError(...)`` / ``raise TypeError(...)`` (or without the
+    call) in ``path``; the project's own errors (bearingsim.errors) subclass both."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    out = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Raise) or node.exc is None:
+            continue
+        exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+        if isinstance(exc, ast.Name) and exc.id in ("ValueError", "TypeError"):
+            out.append((node.lineno, exc.id))
+    return sorted(out)
+
+
+def test_the_raise_scanner_finds_bare_value_and_type_errors(tmp_path):
+    f = tmp_path / "t.py"
+    f.write_text("def f(x):\n    if x:\n        raise ValueError('x')\n    raise TypeError\n"
+                 "def g():\n    try:\n        pass\n    except ValueError:\n        raise\n"
+                 "    raise InputError('x', 'hint')\n")
+    assert bare_raises(f) == [(3, "ValueError"), (4, "TypeError")]
+
+
+def test_no_bare_value_or_type_error():
+    """Every error a user can reach is the project's own (issue 35 item 3): a BearingsimError
+    has a message, a hint and an exit code, and the command line prints it as one line (a bare
+    ValueError would print a traceback)."""
+    from fnmatch import fnmatch
+
+    bad = []
+    for p in sources():
+        rel = p.relative_to(PACKAGE).as_posix()
+        if any(fnmatch(rel, pat) for pat in NOT_YET_CONVERTED):
+            continue
+        bad += [f"bearingsim/{rel}:{line} raises a bare {name}" for line, name in bare_raises(p)]
+    assert not bad, ("raise bearingsim.errors.InputError(message, hint) (InputTypeError for a wrong type) "
+                     "instead:\n" + "\n".join(bad))
+

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 import re
 
+from ..errors import InputTypeError
+
 __all__ = ["to_toml", "toml_value"]
 
 
@@ -49,7 +51,8 @@ def toml_value(v) -> str:
         return _toml_str(v)
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(toml_value(e) for e in v) + "]"
-    raise TypeError(f"cannot write {type(v).__name__} {v!r} to TOML")
+    raise InputTypeError(f"cannot write {type(v).__name__} {v!r} to TOML",
+                         "TOML values here are bool, int, float, str, or lists/tuples of them")
 
 
 def to_toml(data: dict, header: str | None = None) -> str:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from ..errors import InputError, InputTypeError
 from ..names import LOCATIONS
 
 PROFILES = ("rectangular", "ball-path")
@@ -63,11 +64,14 @@ class Spall(eqx.Module):
 
     def __check_init__(self):
         if self.profile not in PROFILES:
-            raise ValueError(f"spall profile must be one of {PROFILES}, got {self.profile!r}")
+            raise InputError(f"spall profile must be one of {PROFILES}, got {self.profile!r}",
+                             "'ball-path' (default) or 'rectangular'")
         if self.location not in LOCATIONS:
-            raise ValueError(f"defect location must be one of {LOCATIONS}, got {self.location!r}")
+            raise InputError(f"defect location must be one of {LOCATIONS}, got {self.location!r}",
+                             "the surface the defect lies on: the outer or inner raceway, or a ball")
         if not isinstance(self.ball, int) or self.ball < 0:
-            raise ValueError(f"ball index must be an int >= 0, got {self.ball!r}")
+            raise InputError(f"ball index must be an int >= 0, got {self.ball!r}",
+                             "ball is the index (0 .. n_balls - 1) of the ball that carries a ball pit")
 
     @classmethod
     def from_length(cls, bearing, center, length, depth, profile="ball-path", location="outer", ball=0):
@@ -100,7 +104,9 @@ def as_defects(spall) -> tuple:
         return (spall,)
     out = tuple(spall)
     if not all(isinstance(s, Spall) for s in out):
-        raise TypeError("defects must be a Spall or a tuple of Spall")
+        raise InputTypeError("defects must be None, a Spall or a tuple of Spall, got a sequence holding "
+                             + ", ".join(sorted({type(s).__name__ for s in out if not isinstance(s, Spall)})),
+                             "build each defect with Spall(...) or Spall.from_length(...)")
     return out
 
 
@@ -119,7 +125,8 @@ def surface_radius(bearing, location):
         return bearing.inner_raceway_radius
     if location == "ball":
         return 0.5 * bearing.ball_diameter
-    raise ValueError(f"defect location must be one of {LOCATIONS}, got {location!r}")
+    raise InputError(f"defect location must be one of {LOCATIONS}, got {location!r}",
+                     "the surface the defect lies on: the outer or inner raceway, or a ball")
 
 
 def wrap_angle(x):
@@ -183,7 +190,8 @@ def contact_depths(bearing, spall, psi):
             Hi = jnp.maximum(Hi, depth_profile(bearing, sp, psi))
         else:
             if sp.ball >= bearing.n_balls:
-                raise ValueError(f"ball pit on ball {sp.ball}: the bearing has {bearing.n_balls} balls")
+                raise InputError(f"ball pit on ball {sp.ball}: the bearing has {bearing.n_balls} balls",
+                                 f"the ball index must be 0 .. {bearing.n_balls - 1}")
             ho, hi = ball_pit_depths(bearing, sp)
             mine = jnp.arange(bearing.n_balls) == sp.ball
             mine = jnp.broadcast_to(mine, psi.shape)

@@ -9,6 +9,8 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from ..errors import InputError
+
 
 def _f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
@@ -89,9 +91,13 @@ class Bearing(eqx.Module):
 
     def __check_init__(self):
         if self.design not in DESIGNS:
-            raise ValueError(f"design must be one of {DESIGNS}, got {self.design!r}")
+            raise InputError(f"design must be one of {DESIGNS}, got {self.design!r}",
+                             "'auto' (angular contact when the free contact angle > 0, else deep groove), "
+                             "'deep_groove' or 'angular_contact'")
         if self.shoulder_angles is not None and self.shoulder_angles.shape[-1:] != (4,):
-            raise ValueError("shoulder_angles must be [inner high, inner low, outer high, outer low] (rad)")
+            raise InputError("shoulder_angles must be [inner high, inner low, outer high, outer low] (rad), "
+                             f"4 angles along the last axis, got shape {tuple(self.shoulder_angles.shape)}",
+                             "or None for the design's catalogue-typical shoulders")
 
     @classmethod
     def from_clearance(cls, n_balls, ball_diameter, pitch_diameter, f_inner, f_outer,

@@ -15,6 +15,7 @@ import numpy as np
 import jax.numpy as jnp
 from jax import lax
 
+from ..errors import InputError
 from ..fastmath import clamp
 from ..programs import jit
 
@@ -121,7 +122,9 @@ def ellipticity(F, method: str = "exact"):
     if method == "brewe-hamrock":
         return brewe_hamrock(F)
     if method != "exact":
-        raise ValueError(f"ellipticity method must be 'exact' or 'brewe-hamrock', got {method!r}")
+        raise InputError(f"ellipticity method must be 'exact' or 'brewe-hamrock', got {method!r}",
+                         "'exact' (default) solves to machine precision; 'brewe-hamrock' uses the "
+                         "closed-form approximations")
     return _ellipticity_exact(F)
 
 

@@ -9,6 +9,7 @@ from typing import NamedTuple
 import equinox as eqx
 import jax.numpy as jnp
 
+from ..errors import InputError
 from ..fastmath import recip, rsqrt
 
 #: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
@@ -36,7 +37,8 @@ class Operation(eqx.Module):
 
     def __check_init__(self):
         if self.control not in CONTROL_FACTORS:
-            raise ValueError(f"raceway control must be one of {sorted(CONTROL_FACTORS)}, got {self.control!r}")
+            raise InputError(f"raceway control must be one of {sorted(CONTROL_FACTORS)}, got {self.control!r}",
+                             "the raceway control hypothesis: 'outer' (default), 'inner' or 'equal'")
 
     @classmethod
     def from_rpm(cls, speed_rpm, control="outer", centrifugal=True, gyroscopic=True):

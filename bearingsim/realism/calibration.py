@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import scipy.signal as ss
 
+from ..errors import InputError
 from ..signals.envelope import RecordMetrics, record_metrics
 
 __all__ = [
@@ -115,9 +116,13 @@ def segment_metrics(x, fs, shaft_hz, duration, order=BPFO_ORDER, band=(2500.0, 5
     """(median RecordMetrics over the non-overlapping ``duration``-long segments of ``x``,
     the list of per-segment metrics)."""
     n = int(round(duration * fs))
+    if n < 1:
+        raise InputError(f"duration must hold at least one sample, got {duration} s at {fs:g} Hz",
+                         "duration is the length (s) of each segment, e.g. 1.0")
     k = len(x) // n
     if k < 1:
-        raise ValueError(f"record of {len(x) / fs:.2f} s is shorter than {duration} s")
+        raise InputError(f"record of {len(x) / fs:.2f} s is shorter than duration = {duration} s",
+                         "pass a shorter duration or a longer record")
     ms = [record_metrics(x[i * n:(i + 1) * n], fs, shaft_hz, order, band) for i in range(k)]
     vals = np.array([list(m.as_dict().values()) for m in ms])
     med = RecordMetrics(*np.median(vals, axis=0))

@@ -28,6 +28,8 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
+from ..errors import InputError
+
 __all__ = ["SIZE_GRID_MM", "PASS_FEATURE_NAMES", "surface_speed", "angle_from_order", "order_of_angle",
            "line_frequency", "pass_times", "pass_features", "FaultLine"]
 
@@ -47,7 +49,8 @@ def surface_speed(bearing, shaft_hz, location, ftf_hz, bsf_hz=None) -> float:
         return float(bearing.inner_raceway_radius) * 2.0 * np.pi * (float(shaft_hz) - float(ftf_hz))
     if location == "ball":
         return 0.5 * float(bearing.ball_diameter) * 2.0 * np.pi * float(bsf_hz)
-    raise ValueError(f"location {location!r}: outer, inner or ball")
+    raise InputError(f"location must be 'outer', 'inner' or 'ball', got {location!r}",
+                     "the surface the defect lies on: the outer or inner raceway, or a ball")
 
 
 def order_of_angle(bearing, location, alpha, slip=0.0):
@@ -59,7 +62,8 @@ def order_of_angle(bearing, location, alpha, slip=0.0):
         return c
     if location == "inner":
         return Z - c
-    raise ValueError("the angle is read from an outer- or inner-race order")
+    raise InputError(f"location must be 'outer' or 'inner' for a race order, got {location!r}",
+                     "the contact angle is read from an outer- or inner-race line (BPFO or BPFI)")
 
 
 def angle_from_order(bearing, location, order, slip=0.0):
@@ -72,7 +76,8 @@ def angle_from_order(bearing, location, order, slip=0.0):
     elif location == "inner":
         c = (1.0 - 2.0 * (Z - order) / (Z * (1.0 - slip))) / float(bearing.g)
     else:
-        raise ValueError("the angle is read from an outer- or inner-race order")
+        raise InputError(f"location must be 'outer' or 'inner' to read a contact angle, got {location!r}",
+                         "the contact angle is read from an outer- or inner-race line (BPFO or BPFI)")
     c = np.where((c > 0.0) & (c <= 1.0 + 1e-12), np.minimum(c, 1.0), np.nan)
     return np.arccos(c)
 

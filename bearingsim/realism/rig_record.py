@@ -47,6 +47,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
+from ..errors import InputError
 from ..physics.pit import (  # noqa: F401  (re-exported: the record pipeline's vocabulary)
     Contact, PIT_LOCATIONS, contact_of, contact_at, PitDepth, pit_load_fraction, pit_depth,
     pit_effective_depth, pit_depth_of_solution, unbridged_fraction, pit_unbridged_fraction, pass_cv)
@@ -80,10 +81,11 @@ def decimate_record(x, fs, fs_out):
     """(y, fs_out): ``x`` low-passed by a zero-phase FIR anti-alias filter and down-sampled by
     the integer ratio ``fs / fs_out`` (``scipy.signal.decimate``, cut-off 0.8 x the new
     Nyquist frequency), as a 12 kHz acquisition of a 48 kHz signal."""
-    q = float(fs) / float(fs_out)
-    k = int(round(q))
+    q = float(fs) / float(fs_out) if float(fs_out) > 0 else float("nan")
+    k = int(round(q)) if np.isfinite(q) else 0
     if k < 1 or abs(q - k) > 1e-9:
-        raise ValueError(f"fs / fs_out must be an integer, got {fs} / {fs_out}")
+        raise InputError(f"fs / fs_out must be an integer >= 1, got {fs} / {fs_out}",
+                         "choose an output rate fs_out > 0 that divides the input rate, e.g. 48000 -> 12000 Hz")
     if k == 1:
         return np.asarray(x, dtype=float), float(fs)
     return ss.decimate(np.asarray(x, dtype=float), k, ftype="fir", zero_phase=True), float(fs_out)

@@ -34,6 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = ["Background", "background_signal", "shaped_noise", "random_background", "BACKGROUND_DEFAULTS"]
 
 
@@ -70,7 +72,9 @@ def shaped_noise(rng: np.random.Generator, n, fs, rms, frequencies=(), levels_db
     f_tab = np.asarray(frequencies, float)
     if f_tab.size and n > 1:
         if f_tab.size != np.asarray(levels_db).size:
-            raise ValueError("psd_frequencies and psd_levels_db need the same length")
+            raise InputError("psd_frequencies and psd_levels_db need the same length, got "
+                             f"{f_tab.size} and {np.asarray(levels_db).size}",
+                             "one level (dB) per frequency (Hz) of the PSD table")
         X = np.fft.rfft(x)
         f = np.fft.rfftfreq(int(n), 1.0 / float(fs))
         lf = np.log(np.maximum(f, f_tab.min() if f_tab.min() > 0 else 1.0))

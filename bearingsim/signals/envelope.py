@@ -27,6 +27,8 @@ from numbers import Integral, Real
 import numpy as np
 import scipy.signal as ss
 
+from ..errors import InputError, InputTypeError
+
 __all__ = [
     "Spectrum",
     "EnvelopeSpectrum",
@@ -45,40 +47,50 @@ __all__ = [
 
 
 # --------------------------------------------------------------------------- checks
+_BAND_HINT = "the band is (f_lo, f_hi) in Hz with 0 < f_lo < f_hi < fs/2"
+
+
 def _check_fs(fs) -> float:
     if isinstance(fs, (bool, np.bool_)) or not isinstance(fs, (Real, np.integer, np.floating)):
-        raise TypeError(f"fs must be a real number (sampling frequency in Hz), got {type(fs).__name__}")
+        raise InputTypeError(f"fs must be a real number (sampling frequency in Hz), got {type(fs).__name__}",
+                             "pass the sample rate as a float or int, e.g. fs=12000.0")
     fs = float(fs)
     if not np.isfinite(fs) or fs <= 0.0:
-        raise ValueError(f"fs must be a finite sampling frequency > 0 Hz, got {fs}")
+        raise InputError(f"fs must be a finite sampling frequency > 0 Hz, got {fs}",
+                         "the sample rate of the record in Hz, e.g. 12000")
     return fs
 
 
 def _check_signal(x, name: str = "x", min_len: int = 2) -> np.ndarray:
     a = np.asarray(x)
     if np.iscomplexobj(a):
-        raise ValueError(f"{name} must be real-valued, got a complex array")
+        raise InputError(f"{name} must be real-valued, got a complex array",
+                         f"pass the real part (np.real({name})) or one real channel")
     if a.ndim != 1:
-        raise ValueError(f"{name} must be a 1-D array (one channel), got shape {a.shape}")
+        raise InputError(f"{name} must be a 1-D array (one channel), got shape {a.shape}",
+                         f"pass one channel, e.g. {name}[:, 0] of a (samples, channels) array")
     try:
         a = a.astype(float, copy=False)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric, got dtype {a.dtype}") from exc
+        raise InputError(f"{name} must be numeric, got dtype {a.dtype}",
+                         "pass the samples as a float array") from exc
     if a.size < min_len:
-        raise ValueError(f"{name} needs at least {min_len} samples, got {a.size}")
+        raise InputError(f"{name} needs at least {min_len} samples, got {a.size}", "pass a longer record")
     bad = ~np.isfinite(a)
     if bad.any():
         i = int(np.argmax(bad))
-        raise ValueError(f"{name} must be finite: {int(bad.sum())} NaN/inf value(s), first at index {i} ({a[i]})")
+        raise InputError(f"{name} must be finite: {int(bad.sum())} NaN/inf value(s), first at index {i} ({a[i]})",
+                         "remove or interpolate the non-finite samples before the analysis")
     return a
 
 
 def _check_freq(value, name: str) -> float:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (Real, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number (Hz), got {type(value).__name__}")
+        raise InputTypeError(f"{name} must be a real number (Hz), got {type(value).__name__}",
+                             f"pass {name} as a float or int in Hz")
     value = float(value)
     if not np.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value}")
+        raise InputError(f"{name} must be finite, got {value}", f"pass {name} as a finite frequency in Hz")
     return value
 
 
@@ -87,11 +99,11 @@ def _check_band(f_lo, f_hi, fs: float) -> tuple[float, float]:
     f_hi = _check_freq(f_hi, "f_hi")
     nyq = fs / 2.0
     if f_lo <= 0.0:
-        raise ValueError(f"f_lo must be > 0 Hz, got {f_lo:g}")
+        raise InputError(f"f_lo must be > 0 Hz, got {f_lo:g}", _BAND_HINT)
     if f_hi >= nyq:
-        raise ValueError(f"f_hi must be < fs/2 = {nyq:g} Hz (Nyquist), got {f_hi:g}")
+        raise InputError(f"f_hi must be < fs/2 = {nyq:g} Hz (Nyquist), got {f_hi:g}", _BAND_HINT)
     if f_lo >= f_hi:
-        raise ValueError(f"f_lo must be < f_hi, got f_lo = {f_lo:g} Hz >= f_hi = {f_hi:g} Hz")
+        raise InputError(f"f_lo must be < f_hi, got f_lo = {f_lo:g} Hz >= f_hi = {f_hi:g} Hz", _BAND_HINT)
     return f_lo, f_hi
 
 
@@ -101,7 +113,7 @@ def _unpack_band(band, fs: float):
     try:
         f_lo, f_hi = band
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"band must be None or a pair (f_lo, f_hi) in Hz, got {band!r}") from exc
+        raise InputError(f"band must be None or a pair (f_lo, f_hi) in Hz, got {band!r}", _BAND_HINT) from exc
     return _check_band(f_lo, f_hi, fs)
 
 
@@ -117,15 +129,17 @@ def bandpass(x, fs, f_lo, f_hi, order: int = 4) -> np.ndarray:
     fs = _check_fs(fs)
     f_lo, f_hi = _check_band(f_lo, f_hi, fs)
     if isinstance(order, (bool, np.bool_)) or not isinstance(order, Integral) or order < 1:
-        raise ValueError(f"order must be an integer >= 1, got {order!r}")
+        raise InputError(f"order must be an integer >= 1, got {order!r}",
+                         "order is the Butterworth order of the band-pass, e.g. 4")
     x = _check_signal(x)
     sos = ss.butter(int(order), [f_lo, f_hi], btype="bandpass", fs=fs, output="sos")
     # scipy's default padlen for sosfiltfilt; check it here for a clear message
     n_zeros = min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
     padlen = 3 * (2 * len(sos) + 1 - n_zeros)
     if x.size <= padlen:
-        raise ValueError(
-            f"x is too short ({x.size} samples) for an order-{order} zero-phase band-pass; need > {padlen}"
+        raise InputError(
+            f"x is too short ({x.size} samples) for an order-{order} zero-phase band-pass; need > {padlen}",
+            "pass a longer record or a lower order",
         )
     return ss.sosfiltfilt(sos, x)
 
@@ -187,13 +201,17 @@ def _spectrum(x, fs, window, nfft, band, cls):
     if nfft is None:
         nfft = 2 * n
     if isinstance(nfft, (bool, np.bool_)) or not isinstance(nfft, Integral):
-        raise ValueError(f"nfft must be None or an integer >= len(x) = {n}, got {nfft!r}")
+        raise InputError(f"nfft must be None or an integer >= len(x) = {n}, got {nfft!r}",
+                         "leave nfft=None (2 x len(x)) or pass an integer >= len(x)")
     if nfft < n:
-        raise ValueError(f"nfft must be >= len(x) = {n} (no truncation), got {nfft}")
+        raise InputError(f"nfft must be >= len(x) = {n} (no truncation), got {nfft}",
+                         "leave nfft=None (2 x len(x)) or pass an integer >= len(x)")
     try:
         w = ss.get_window(window, n, fftbins=True)
     except (ValueError, TypeError) as exc:
-        raise ValueError(f"window {window!r} is not understood by scipy.signal.get_window: {exc}") from exc
+        raise InputError(f"window {window!r} is not understood by scipy.signal.get_window: {exc}",
+                         "a window name such as 'hann' (default), 'hamming' or 'boxcar', or a (name, "
+                         "parameter) tuple such as ('kaiser', 8.0)") from exc
     amp = np.abs(np.fft.rfft(x * w, int(nfft))) * (2.0 / w.sum())
     amp[0] *= 0.5
     if nfft % 2 == 0:
@@ -233,7 +251,8 @@ def envelope_spectrum(x, fs, band=None, window="hann", nfft=None) -> EnvelopeSpe
 # --------------------------------------------------------------------------- peaks
 def _check_spectrum(spectrum):
     if not isinstance(spectrum, Spectrum):
-        raise TypeError(f"spectrum must be a Spectrum/EnvelopeSpectrum, got {type(spectrum).__name__}")
+        raise InputTypeError(f"spectrum must be a Spectrum/EnvelopeSpectrum, got {type(spectrum).__name__}",
+                             "pass the result of envelope_spectrum() or amplitude_spectrum()")
 
 
 def _peak(spectrum: Spectrum, f_expected: float, rel_window: float):
@@ -273,19 +292,23 @@ def peak_frequency(spectrum: Spectrum, f_expected, rel_window: float = 0.1) -> f
     parabola through the log amplitudes of the maximum bin and its two
     neighbours.  With the default 2x zero-padded Hann spectra the bias for a
     clean tone is < 0.002 of a native bin ``fs/len(x)``.
-    Raises ValueError if the window holds no local maximum.
+    Raises :class:`~bearingsim.errors.InputError` (a ValueError) if the window holds no local
+    maximum.
     """
     _check_spectrum(spectrum)
     f_expected = _check_freq(f_expected, "f_expected")
     if f_expected <= 0.0:
-        raise ValueError(f"f_expected must be > 0 Hz, got {f_expected:g}")
+        raise InputError(f"f_expected must be > 0 Hz, got {f_expected:g}",
+                         "f_expected is the frequency (Hz) of the line to look for, e.g. BPFO")
     if not (0.0 < rel_window < 1.0):
-        raise ValueError(f"rel_window must be in (0, 1), got {rel_window!r}")
+        raise InputError(f"rel_window must be in (0, 1), got {rel_window!r}",
+                         "rel_window is the relative half width of the search window, e.g. 0.1 for +- 10 %")
     fp, _ = _peak(spectrum, f_expected, float(rel_window))
     if not np.isfinite(fp):
-        raise ValueError(
-            f"no local maximum within {f_expected:g} Hz ± {100 * rel_window:g} % "
-            f"(spectrum covers 0–{spectrum.freqs[-1]:g} Hz)"
+        raise InputError(
+            f"no local maximum within f_expected = {f_expected:g} Hz ± {100 * rel_window:g} % "
+            f"(spectrum covers 0–{spectrum.freqs[-1]:g} Hz)",
+            "check that f_expected lies inside the spectrum, or widen rel_window",
         )
     return fp
 
@@ -301,11 +324,12 @@ def harmonic_peaks(spectrum: Spectrum, f0, n: int = 5, rel_window: float = 0.05)
     _check_spectrum(spectrum)
     f0 = _check_freq(f0, "f0")
     if f0 <= 0.0:
-        raise ValueError(f"f0 must be > 0 Hz, got {f0:g}")
+        raise InputError(f"f0 must be > 0 Hz, got {f0:g}", "f0 is the fundamental frequency (Hz) of the harmonics")
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, Integral) or n < 1:
-        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+        raise InputError(f"n must be an integer >= 1, got {n!r}", "n is the number of harmonics to measure, e.g. 5")
     if not (0.0 < rel_window < 1.0):
-        raise ValueError(f"rel_window must be in (0, 1), got {rel_window!r}")
+        raise InputError(f"rel_window must be in (0, 1), got {rel_window!r}",
+                         "rel_window is the relative half width of each harmonic's window, e.g. 0.05 for +- 5 %")
     out = []
     for k in range(1, int(n) + 1):
         fk, ak = _peak(spectrum, k * f0, float(rel_window))
@@ -350,27 +374,35 @@ def select_band(x, fs, resonance_hz=None, bandwidth_hz=None, *, f_min=None, retu
     if resonance_hz is not None:
         fr = _check_freq(resonance_hz, "resonance_hz")
         if not (0.0 < fr < nyq):
-            raise ValueError(f"resonance_hz must be in (0, fs/2 = {nyq:g}) Hz, got {fr:g}")
+            raise InputError(f"resonance_hz must be in (0, fs/2 = {nyq:g}) Hz, got {fr:g}",
+                             "give a resonance below the Nyquist frequency, or None to pick the band by "
+                             "envelope kurtosis")
         bw = 0.25 * fr if bandwidth_hz is None else _check_freq(bandwidth_hz, "bandwidth_hz")
         if bw <= 0.0:
-            raise ValueError(f"bandwidth_hz must be > 0 Hz, got {bw:g}")
+            raise InputError(f"bandwidth_hz must be > 0 Hz, got {bw:g}",
+                             "give a bandwidth in Hz, or None for 0.25 x resonance_hz")
         lo = max(fr - 0.5 * bw, 1e-3 * nyq)
         hi = min(fr + 0.5 * bw, 0.98 * nyq)
         if lo >= hi:
-            raise ValueError(f"band {fr:g} ± {bw / 2:g} Hz is empty after clipping to (0, fs/2)")
+            raise InputError(f"band resonance_hz ± bandwidth_hz/2 = {fr:g} ± {bw / 2:g} Hz is empty after "
+                             f"clipping to [{1e-3 * nyq:g}, {0.98 * nyq:g}] Hz (inside fs/2 = {nyq:g} Hz)",
+                             "move resonance_hz away from 0 and fs/2, or change bandwidth_hz")
         band = (float(lo), float(hi))
         return (band, None, None) if return_kurtosis else band
 
     if bandwidth_hz is not None:
-        raise ValueError("bandwidth_hz only applies when resonance_hz is given")
+        raise InputError(f"bandwidth_hz (= {bandwidth_hz!r}) only applies when resonance_hz is given",
+                         "give resonance_hz too, or leave bandwidth_hz None")
     f_min = fs / 64.0 if f_min is None else _check_freq(f_min, "f_min")
     if not (0.0 < f_min < nyq):
-        raise ValueError(f"f_min must be in (0, fs/2 = {nyq:g}) Hz, got {f_min:g}")
+        raise InputError(f"f_min must be in (0, fs/2 = {nyq:g}) Hz, got {f_min:g}",
+                         "f_min is the lowest band edge of the search (Hz); None for fs/64")
     r = 2.0 ** (1.0 / 6.0)
     j = np.arange(np.ceil(3 * np.log2(f_min * r / 1000.0)), np.floor(3 * np.log2(0.98 * nyq / r / 1000.0)) + 1)
     centres = 1000.0 * 2.0 ** (j / 3.0)
     if centres.size == 0:
-        raise ValueError(f"no 1/3-octave band fits between f_min = {f_min:g} Hz and fs/2 = {nyq:g} Hz")
+        raise InputError(f"no 1/3-octave band fits between f_min = {f_min:g} Hz and fs/2 = {nyq:g} Hz",
+                         "lower f_min, or analyse a record of a higher sample rate")
     edges = np.column_stack([centres / r, centres * r])
     trim = int(0.05 * x.size)
     kurt = _band_kurtosis(x, fs, edges, trim)
@@ -389,15 +421,18 @@ def defect_markers(freqs: dict, n_harmonics: int = 5, harmonics_of=("BPFO",)):
     Returns a list of ``(label, frequency)`` in the order of ``freqs``.
     """
     if not isinstance(freqs, dict):
-        raise TypeError(f"freqs must be a dict label -> frequency (Hz), got {type(freqs).__name__}")
+        raise InputTypeError(f"freqs must be a dict label -> frequency (Hz), got {type(freqs).__name__}",
+                             "e.g. {'BPFO': 107.4, 'FTF': 11.9, 'shaft': 29.95}")
     if isinstance(n_harmonics, (bool, np.bool_)) or not isinstance(n_harmonics, Integral) or n_harmonics < 1:
-        raise ValueError(f"n_harmonics must be an integer >= 1, got {n_harmonics!r}")
+        raise InputError(f"n_harmonics must be an integer >= 1, got {n_harmonics!r}",
+                         "n_harmonics is the number of harmonics drawn of each line in harmonics_of, e.g. 5")
     expand = {str(h).upper() for h in harmonics_of}
     out = []
     for label, f in freqs.items():
         f = _check_freq(f, f"freqs[{label!r}]")
         if f <= 0.0:
-            raise ValueError(f"freqs[{label!r}] must be > 0 Hz, got {f:g}")
+            raise InputError(f"freqs[{label!r}] must be > 0 Hz, got {f:g}",
+                             "every marker is a positive frequency in Hz")
         if str(label).upper() in expand:
             out.extend((str(label) if k == 1 else f"{k}x{label}", k * f) for k in range(1, int(n_harmonics) + 1))
         else:
@@ -420,7 +455,8 @@ def fault_lines(frequencies: dict, location: str | None = "outer") -> tuple[str,
         f = 2.0 * fr["bsf_Hz"]
         return "2BSF", f, {"2BSF": f, "2BSF-FTF": f - fc, "2BSF+FTF": f + fc, "FTF": fc}
     if location not in (None, "outer"):
-        raise ValueError(f"defect location must be 'outer', 'inner', 'ball' or None, got {location!r}")
+        raise InputError(f"defect location must be 'outer', 'inner', 'ball' or None, got {location!r}",
+                         "None analyses a healthy bearing at BPFO")
     f = fr["bpfo_Hz"]
     return "BPFO", f, {"BPFO": f, "FTF": fc, "shaft": sh}
 
@@ -457,7 +493,9 @@ class RecordMetrics:
 def _largest_near(f, S, f0, rel):
     m = (f > f0 * (1.0 - rel)) & (f < f0 * (1.0 + rel))
     if not m.any():
-        raise ValueError(f"no spectrum bin within {f0:g} Hz +- {100 * rel:g} %")
+        raise InputError(f"no spectrum bin within {f0:g} Hz +- {100 * rel:g} %",
+                         "the line (fault_order x shaft_hz and its harmonics) must lie below fs/2, and the "
+                         "record must be long enough to resolve it")
     i = int(np.argmax(S[m]))
     return float(f[m][i]), float(S[m][i])
 
@@ -488,17 +526,21 @@ def record_metrics(x, fs, shaft_hz, fault_order, band=(2500.0, 5500.0),
     shaft_hz = _check_freq(shaft_hz, "shaft_hz")
     fault_order = _check_freq(fault_order, "fault_order")
     if shaft_hz <= 0.0 or fault_order <= 0.0:
-        raise ValueError(f"shaft_hz and fault_order must be > 0, got {shaft_hz:g}, {fault_order:g}")
+        raise InputError(f"shaft_hz and fault_order must be > 0, got {shaft_hz:g}, {fault_order:g}",
+                         "shaft_hz is the shaft speed in Hz (rpm / 60); fault_order the fault line over it "
+                         "(e.g. BPFO / f_r)")
     b = _unpack_band(band, fs)
     if b is None:
-        raise ValueError("band must be a pair (f_lo, f_hi) in Hz")
+        raise InputError("band must be a pair (f_lo, f_hi) in Hz, got None", _BAND_HINT)
     lo, hi = (_check_freq(v, "median_window") for v in median_window)
     if not 0.0 <= lo < hi:
-        raise ValueError(f"median_window must be (lo, hi) with 0 <= lo < hi, got {median_window!r}")
+        raise InputError(f"median_window must be (lo, hi) with 0 <= lo < hi, got {median_window!r}",
+                         "the frequency range (Hz) of the spectrum's floor, default (30, 600)")
     x = x - x.mean()
     m2 = float(np.mean(x * x))
     if m2 == 0.0:
-        raise ValueError("x is constant: RMS and kurtosis are undefined")
+        raise InputError(f"x is constant (all {x.size} samples equal): RMS and kurtosis are undefined",
+                         "check the channel and the file of the record")
     y = bandpass(x, fs, *b)
     yc = y - y.mean()
     e2 = np.abs(ss.hilbert(y)) ** 2

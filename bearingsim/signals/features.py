@@ -39,6 +39,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal as ss
 
+from ..errors import InputError
 from ..physics.defect import LOCATIONS
 
 __all__ = ["FaultOrders", "fault_orders", "FEATURE_NAMES", "window_features", "cut_windows", "octave_bands"]
@@ -76,8 +77,8 @@ def octave_bands(fs) -> list:
     one cut there, kept when at least half an octave wide) and the whole 500 Hz - 0.45 fs."""
     top = 0.45 * float(fs)
     if top <= 1000.0:
-        raise ValueError(f"sample rate {fs:g} Hz: the features need at least 2.3 kHz "
-                         "(bands from 500 Hz up to 0.45 fs)")
+        raise InputError(f"sample rate fs = {fs:g} Hz: the features need at least 2.3 kHz "
+                         "(bands from 500 Hz up to 0.45 fs)", "use a record sampled at 2.3 kHz or more")
     bands, lo = [], 750.0
     while lo * 1.41 < top:
         bands.append((lo, min(2.0 * lo, top)))
@@ -90,7 +91,9 @@ def cut_windows(x, fs, window_s) -> np.ndarray:
     x = np.asarray(x, float).ravel()
     T = int(round(float(window_s) * float(fs)))
     if T < 16 or x.size < T:
-        raise ValueError(f"a record of {x.size} samples has no window of {window_s:g} s at {fs:g} Hz")
+        raise InputError(f"a record of {x.size} samples has no window of window_s = {window_s:g} s at {fs:g} Hz",
+                         "window_s must hold at least 16 samples and at most the whole record "
+                         "(fs: the sample rate in Hz)")
     n = x.size // T
     return x[:n * T].reshape(n, T)
 
@@ -115,13 +118,18 @@ def window_features(windows, fs, shaft_hz, orders: FaultOrders) -> np.ndarray:
     X = np.atleast_2d(np.asarray(windows, float))
     N, T = X.shape
     if T < 64:
-        raise ValueError(f"windows of {T} samples are too short for envelope features (need >= 64)")
+        raise InputError(f"windows of {T} samples are too short for envelope features (need >= 64)",
+                         "cut windows of at least 64 samples (window_s >= 64 / fs)")
     if not np.all(np.isfinite(X)):
-        raise ValueError("windows hold NaN or infinite samples")
+        raise InputError(f"windows hold {int(np.sum(~np.isfinite(X)))} NaN or infinite samples",
+                         "remove or interpolate the non-finite samples before the features")
     fs = float(fs)
     fr = np.broadcast_to(np.asarray(shaft_hz, float), (N,)).copy()
-    if np.any(~np.isfinite(fr)) or np.any(fr <= 0):
-        raise ValueError("shaft_hz must be finite and > 0")
+    bad = ~np.isfinite(fr) | (fr <= 0)
+    if bad.any():
+        raise InputError(f"shaft_hz must be finite and > 0 Hz: {int(bad.sum())} of {N} value(s) are not "
+                         f"(first: {fr[np.argmax(bad)]:g})",
+                         "shaft_hz is the shaft frequency in Hz (rpm / 60), a scalar or one per window")
     X = X - X.mean(axis=1, keepdims=True)
     rms = np.sqrt(np.mean(X * X, axis=1))
     Xn = X / np.where(rms > 0, rms, 1.0)[:, None]

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = ["pass_factors", "pass_variation", "vary_passes", "strike_mask"]
 
 def pass_factors(rng: np.random.Generator, n, cv) -> np.ndarray:
@@ -20,7 +22,8 @@ def pass_factors(rng: np.random.Generator, n, cv) -> np.ndarray:
     (all 1 for cv = 0): ``exp(s xi - s^2)``, ``s^2 = ln(1 + cv^2)``, xi standard normal."""
     cv = float(cv)
     if cv < 0:
-        raise ValueError(f"cv must be >= 0, got {cv}")
+        raise InputError(f"cv must be >= 0, got {cv}",
+                         "cv is the coefficient of variation of the pass factors, 0 for none")
     xi = rng.standard_normal(int(n))
     s2 = np.log1p(cv * cv)
     return np.exp(np.sqrt(s2) * xi - s2)
@@ -68,10 +71,12 @@ def vary_passes(x, fs, pass_times, factors, shifts=None, lead=0.15, taper=0.1) -
     tp = np.sort(np.asarray(pass_times, dtype=float))
     factors = np.asarray(factors, dtype=float)
     if factors.size != tp.size + 1:
-        raise ValueError(f"need len(pass_times) + 1 = {tp.size + 1} factors, got {factors.size}")
+        raise InputError(f"need len(pass_times) + 1 = {tp.size + 1} factors, got {factors.size}",
+                         "one factor per pass plus one (index 0) for the part before the first pass")
     shifts = np.zeros(factors.size) if shifts is None else np.asarray(shifts, dtype=float)
     if shifts.size != factors.size:
-        raise ValueError(f"need {factors.size} shifts (one per factor), got {shifts.size}")
+        raise InputError(f"need {factors.size} shifts (one per factor), got {shifts.size}",
+                         "one delay (s) per factor, or shifts=None for none")
     m = x.mean()
     xc = x - m
     t = np.arange(x.size) / float(fs)
@@ -112,5 +117,6 @@ def strike_mask(rng: np.random.Generator, n, probability) -> np.ndarray:
     no stable 2 BSF line)."""
     p = float(probability)
     if not 0.0 <= p <= 1.0:
-        raise ValueError(f"strike probability must be within [0, 1], got {p}")
+        raise InputError(f"strike probability must be within [0, 1], got {p}",
+                         "1 strikes on every pass, 0 on none")
     return (rng.random(int(n)) < p).astype(float)
