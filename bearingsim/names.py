@@ -1,13 +1,20 @@
 """The names every layer shares, importable without JAX (the command line's parser builds its
 choices from them before any JAX import): the defect locations, in the order of the fault classes.
 
-``bearingsim.physics.defect.LOCATIONS`` is this tuple; the data set classes are ``("healthy",) +
-LOCATIONS`` (``bearingsim.datasets.CLASSES``)."""
+``bearingsim.physics.defect.LOCATIONS`` is this tuple; the fault classes of a data set item, an
+identification and the transfer benchmark are :data:`CLASSES` (one definition: every module
+imports it from here), their numbers :data:`CLASS_NUMBER`."""
 
 #: where a localized defect can be: a spall on the outer or the inner raceway, a pit on a ball
 LOCATIONS = ("outer", "inner", "ball")
 
-__all__ = ["LOCATIONS", "noun_module", "lazy_exports"]
+#: the fault classes, index = ``fault_class`` of a data set item: healthy, then the locations
+CLASSES = ("healthy",) + LOCATIONS
+
+#: class name -> its number (``fault_class``): use these instead of bare integers
+CLASS_NUMBER = {name: number for number, name in enumerate(CLASSES)}
+
+__all__ = ["LOCATIONS", "CLASSES", "CLASS_NUMBER", "noun_module", "lazy_exports"]
 
 
 def noun_module(module_name: str, noun: str):

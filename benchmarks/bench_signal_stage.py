@@ -1,7 +1,7 @@
-"""The data set's signal stage: the host loop of today (per item: pass variation and the sensor
-modes, bearingsim.dynamics.vary_sensor; the background, bearingsim.signals.background; the SNR scaling
-of dataset._simulate_chunk) against bearingsim.signals.signal_stage.finish_items (one jitted program for
-the chunk).  Usage: python benchmarks/bench_signal_stage.py [items] [samples]; prints the device."""
+"""The data set's signal stage: bearingsim.signals.signal_stage.finish_items (one jitted program for
+the chunk: pass variation and the sensor modes, background, SNR scaling), first call and warm.  (The
+host loop it replaced, dynamics.vary_sensor, left the package with issue 32: a single simulation
+now uses the same stage.)  Usage: python benchmarks/bench_signal_stage.py [items] [samples]."""
 import sys
 import time
 
@@ -9,9 +9,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bearingsim.signals import background as bgm
 from bearingsim.signals import signal_stage as ss
-from bearingsim.dynamics import Realism, vary_sensor
+from bearingsim.dynamics import Realism
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 1000
 T = int(sys.argv[2]) if len(sys.argv) > 2 else 4800
@@ -36,27 +35,6 @@ def inputs(n, T, P=24, seed=0):
                 fault_class=np.arange(n) % 4, shaft_hz=rng.uniform(28.7, 30.0, n))
 
 
-def host(inp, draws, seeds):
-    """Today's per-item host work of a chunk (dataset._simulate_chunk and vary_sensor)."""
-    n, T = inp["housing"].shape
-    tp = [r[np.isfinite(r)] for r in inp["pass_times"]]
-    modes = tuple(np.asarray(draws.modes[..., j]) for j in range(3))
-    a = vary_sensor(inp["housing"], inp["sensor"], FS, tp, REALISM, inp["unbridged"], seeds, modes,
-                    None, np.asarray(draws.strike_probability))
-    gain, snr_t = np.asarray(draws.signal_gain).copy(), np.asarray(draws.snr_dB)
-    rms = lambda v: float(np.sqrt(np.mean(v * v)))  # noqa: E731
-    for j in range(n):
-        rng = np.random.default_rng(np.random.SeedSequence([int(seeds[j]), 11]))
-        bg = bgm.random_background(rng, FS, {"noise_rms_m_s2": (0.2, 2.0)})
-        x = bgm.background_signal(rng, T, FS, inp["shaft_hz"][j], bg)
-        bg.as_labels()
-        s = rms(a[j] - a[j].mean())
-        if inp["fault_class"][j] > 0 and s > 0:
-            gain[j] = 10.0 ** (snr_t[j] / 20.0) * rms(x) / s
-        a[j] = gain[j] * a[j] + x
-    return a
-
-
 def main():
     print(f"device: {jax.devices()[0].device_kind} ({jax.default_backend()}), {N} items x {T} samples at {FS:g} Hz")
     inp = inputs(N, T)
@@ -70,18 +48,13 @@ def main():
         out, lab = ss.finish_items(keys, *args, fc, jnp.asarray(inp["shaft_hz"]), d, st)
         return jax.block_until_ready((out, lab, d))
     t0 = time.perf_counter()
-    _, _, d = device()
+    device()
     first = time.perf_counter() - t0
     t0 = time.perf_counter()
     device()
     warm = time.perf_counter() - t0
     print(f"signal_stage.finish_items (+ draw_items): first call {first:.2f} s (trace + compile or cache load), "
           f"warm {warm:.3f} s = {1e3 * warm / N:.3f} ms/item")
-    t0 = time.perf_counter()
-    host(inp, d, np.arange(N))
-    h = time.perf_counter() - t0
-    print(f"host loop (vary_sensor + background + SNR per item): {h:.2f} s = {1e3 * h / N:.2f} ms/item; "
-          f"speed-up warm {h / warm:.1f}x")
 
 
 if __name__ == "__main__":

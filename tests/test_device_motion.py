@@ -154,12 +154,15 @@ def test_stages_and_jumps_equal_host():
     np.testing.assert_allclose(j, want, rtol=0, atol=1e-9)
 
 
-def test_sensor_filter_device_equals_host():
-    """jax.scipy's and scipy's matrix exponentials of the ill-scaled augmented system (w^2 ~ 4e8
-    beside 1) differ by ~1e-14 of its norm: 1e-9 relative in the small entries (far below the
-    time loop's own error, 1e-2)."""
+def test_sensor_filter_equals_scipy():
+    """The one sensor filter (JAX, balanced, jitted as inside the chunk program) against scipy's
+    unbalanced matrix exponential (tests/oracles/sensor_numpy.py): the ill-scaled augmented
+    system (w^2 ~ 4e8 beside 1) costs scipy's ~1e-14 of its norm, 1e-9 relative in the small
+    entries (far below the time loop's own error, 1e-2)."""
+    from oracles.sensor_numpy import sensor_filter as scipy_filter
+
     f, z, g, h = np.array([2977.6, 3356.0]), np.array([0.013, 0.019]), np.array([1.9, 8.8]), 1 / 96000
-    a = sensor.sensor_filter(f, z, g, h)
-    b = jax.jit(sensor.sensor_filter_device)(f, z, g, h)
+    a = scipy_filter(f, z, g, h)
+    b = jax.jit(sensor.sensor_filter)(f, z, g, h)
     for x, y in zip(a, b):
         np.testing.assert_allclose(np.asarray(y), np.asarray(x), rtol=1e-8, atol=1e-16)

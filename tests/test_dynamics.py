@@ -206,7 +206,8 @@ def test_speed_fluctuation_and_noise_levels():
     t = np.linspace(0, 20, 200001)
     _, _, w = dyn.motion_at(m, t)
     assert np.std(w / 188.0 - 1.0) == pytest.approx(0.02, rel=0.35)      # 8 random sinusoids
-    x = sensor.measurement_noise(np.random.default_rng(0), 48000, 0.686, 48000.0, (2000.0, 6000.0))
+    import jax
+    x = np.asarray(sensor.measurement_noise(jax.random.PRNGKey(0), 48000, 0.686, 48000.0, (2000.0, 6000.0)))
     assert np.sqrt(np.mean(x ** 2)) == pytest.approx(0.686, rel=1e-12)
     X = np.abs(np.fft.rfft(x))
     f = np.fft.rfftfreq(x.size, 1 / 48000.0)

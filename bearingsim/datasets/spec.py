@@ -22,6 +22,7 @@ from ..case.units import to_si
 from ..physics.defect import LOCATIONS
 from ..errors import InputError, ResultCode
 from ..keys import STREAMS
+from ..names import CLASSES
 from ..programs import jit
 
 __all__ = ["LABEL_FIELDS", "LABEL_DTYPE", "SPLITS", "CLASSES", "RANGES", "CLASS_RANGES", "FIELD_STREAMS",
@@ -71,8 +72,6 @@ LABEL_DTYPE = np.dtype([(k, v[0]) for k, v in LABEL_FIELDS.items()])
 
 #: the [dataset] ranges every item draws (speed, loads; the outer / healthy defect ranges)
 RANGES = ("speed_rpm", "radial_N", "axial_N", "spall_length_mm", "spall_depth_mm", "spall_center_deg")
-#: the classes (label field ``fault_class`` = index): healthy, then the defect locations
-CLASSES = ("healthy",) + LOCATIONS
 #: per class: its [dataset] ranges of (length, depth, centre)
 CLASS_RANGES = {"healthy": RANGES[3:], "outer": RANGES[3:],
                 "inner": ("inner_length_mm", "inner_depth_mm", "inner_center_deg"),

@@ -21,7 +21,7 @@ from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 # ------------------------------------------------------------------------------ motion
 from .motion import (DeviceMotion, Motion, crossings_device, defect_edge_times, defect_pass_times, defect_phase,
                      defect_times_device, device_motion_of, draw_motion, host_motion_of, knot_count, motion_at,
-                     motion_at_device, motion_labels, motion_ok_device, pass_count, seed_streams)
+                     motion_at_device, motion_labels, motion_ok_device, pass_count)
 
 # --------------------------------------------------------------------------- ball forces
 from .ball_force import (CHORD_TOL, ITER_CHOICES, RECORD_ROWS, REF_ITERATIONS, BallCarry, ball_errors,
@@ -37,7 +37,7 @@ from .integrate import CHUNK, SCHEMES, edge_fractions, motion_stages, run_adapti
 # ------------------------------------------------------------------------- entry points
 from .frequencies import characteristic_frequencies, spin_ratio, state_frequencies
 from .simulate import (DynamicsResult, ball_records, load_zone_centre, simulate, simulate_case, unbridged_of,
-                       vary_sensor)
+                       finish_record)
 from .program import MENU, MOTION_STREAM, ChunkProgram, chunk_program, item_keys, iterations_needed, menu_iterations
 from .batch import batch_settings, defect_slots, extreme_items
 
@@ -47,7 +47,7 @@ spall_pass_times = defect_pass_times
 
 __all__ = [
     "RESULTS", "DynamicsError", "DynamicsParameters", "Realism",
-    "Motion", "draw_motion", "motion_at", "seed_streams", "motion_labels", "defect_phase",
+    "Motion", "draw_motion", "motion_at", "motion_labels", "defect_phase",
     "defect_edge_times", "defect_pass_times", "spall_edge_times", "spall_pass_times",
     "ITER_CHOICES", "REF_ITERATIONS", "bearing_force", "bearing_force_history", "ball_errors", "choose_ball_iterations", "precompile_ball_check",
     "next_iterations", "RECORD_ROWS", "record_loads_angles",
@@ -55,7 +55,7 @@ __all__ = [
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "motion_stages", "edge_fractions",
     "DynamicsResult", "characteristic_frequencies", "spin_ratio", "state_frequencies", "ball_records", "simulate", "simulate_case",
-    "load_zone_centre", "unbridged_of", "vary_sensor",
+    "load_zone_centre", "unbridged_of", "finish_record",
     "batch_settings", "defect_slots", "extreme_items",
     "DeviceMotion", "motion_at_device", "motion_ok_device", "device_motion_of", "host_motion_of", "knot_count",
     "crossings_device", "defect_times_device", "pass_count",

@@ -39,7 +39,7 @@ from ..physics.defect import as_defects
 from ..keys import STREAMS
 from .parameters import Realism
 
-__all__ = ["Motion", "seed_streams", "draw_motion", "motion_at", "defect_phase", "defect_edge_times", "DeviceMotion",
+__all__ = ["Motion", "draw_motion", "motion_at", "defect_phase", "defect_edge_times", "DeviceMotion",
            "knot_count", "MOTION_STREAM", "motion_at_device", "motion_ok_device", "device_motion_of",
            "crossings_device", "pass_count", "defect_times_device", "motion_labels_device", "host_motion_of",
            "defect_pass_times", "motion_labels", "FLUCTUATION_TERMS"]
@@ -63,12 +63,6 @@ class Motion(NamedTuple):
     knots_p: np.ndarray         # actual progress at the slip knots
     slip_draws: np.ndarray      # eps_k of the pitches within the run
     seed: int
-
-
-def seed_streams(seed):
-    """The run's four random streams: slip forward, slip backward, speed, noise."""
-    ss = np.random.SeedSequence(int(seed))
-    return [np.random.default_rng(s) for s in ss.spawn(4)]     # slip+, slip-, speed, noise
 
 
 def _fluct(m: Motion, t, xp):

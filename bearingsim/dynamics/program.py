@@ -206,7 +206,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
             edges, e_ok = jnp.full((1,), jnp.inf), jnp.bool_(True)
         passes, p_ok = defect_times_device(m, Z, sp, k, (T - 1) / fs, P, ("mid",))
         passes = passes[:P]
-        flt = sensor_mod.sensor_filter_device(fm, zm, gm, h)
+        flt = sensor_mod.sensor_filter(fm, zm, gm, h)
         stages = motion_stages(m, Z, 0, T, fs, scheme, substeps)
         jumps = edge_fractions(edges, 0, T, substeps, h)
         carry = (y0, dy0, jnp.zeros(fm.shape + (2,)))

@@ -15,26 +15,26 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..signals import sensor as sensor_mod
 from ..physics.defect import Spall, as_defects
 from ..errors import InputError
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import result_hint, solve
 from ..physics.kinematics import Operation
-from ..signals.passes import pass_variation
+from ..signals.sensor import measurement_noise
+from ..signals.signal_stage import SignalSettings, pass_variability
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
-from ..keys import item_keys
+from ..keys import item_keys, stream_key
 from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, host_motion_of, knot_count,
-                     motion_at, motion_labels, seed_streams)
+                     motion_at, motion_labels)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "slip_reference",
-           "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "vary_sensor", "simulate",
+           "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "finish_record", "simulate",
            "simulate_case"]
 
 
@@ -79,36 +79,46 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     return pit_unbridged_fraction(host, bearing, j, sp.location, float(sp.length(bearing))), True
 
 
-def vary_sensor(a_h, sens, fs, pass_times, realism, unbridged, seeds, modes, labels=None, strike=None):
-    """Sensor signals (N, T) with the pass-to-pass variability of a pit's impacts: each item's
-    housing acceleration ``a_h`` (N, T) (x) varied pass by pass
-    (:func:`bearingsim.signals.passes.pass_variation`: c.v. and delay s.d. the realism's maxima times
-    the item's unbridged fraction, drawn from its seed; ``pass_times`` N arrays) and put through
-    the sensor modes ``(f, zeta, g)`` ((M,) or (N, M); :func:`bearingsim.signals.sensor.apply_sensor_batch`,
-    the input linear between samples, one program per N).  Rows with ``unbridged`` 0 keep
-    ``sens``.  The variability is a per-pass effective depth and exit time acting on the sensor
-    path only: displacements and housing acceleration stay the ODE's.  ``labels`` (N dicts)
-    get each item's ``unbridged_fraction``, ``pass_amplitude_cv_percent``,
-    ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``.  ``strike`` (N,) or None:
-    each item's probability that its pit strikes on a pass (:func:`bearingsim.signals.passes.strike_mask`;
-    rows with a probability < 1 are varied whatever their unbridged fraction)."""
-    u = np.asarray(unbridged, float)
-    p = np.ones(u.shape) if strike is None else np.broadcast_to(np.asarray(strike, float), u.shape)
-    a = np.array(a_h, dtype=float)
-    out = np.array(sens, dtype=float)
-    for i in range(a.shape[0]):
-        cv = 0.01 * realism.pass_amplitude_cv_max_percent * u[i]
-        jit = 0.01 * realism.pass_delay_sd_max_percent * u[i]
-        a[i], fac, shifts = pass_variation(a[i], fs, pass_times[i], cv, jit, int(seeds[i]), float(p[i]))
-        if labels is not None:
-            labels[i].update(unbridged_fraction=float(u[i]), pass_amplitude_cv_percent=100.0 * cv,
-                             pass_delay_sd_percent=100.0 * jit, pass_factors=fac, pass_shifts=shifts)
-    varied = (u > 0.0) | (p < 1.0)
-    if np.any(varied):
-        f, z, g = (np.asarray(v) for v in modes)
-        y = np.asarray(sensor_mod.apply_sensor_batch(a, 1.0 / fs, f, z, g))
-        out = np.where(varied[:, None], y, out)
-    return out
+def _pass_variability(key, housing, sensor, pass_times, unbridged, modes, settings):
+    return pass_variability(key, housing, sensor, pass_times, unbridged, modes, jnp.float64(1.0), settings)
+
+
+_pass_variability_jit = jit(_pass_variability)
+
+
+def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, fs):
+    """A simulation's sensor record after the time loop, as a data set item's signal stage makes
+    it (:mod:`bearingsim.signals.signal_stage`, every draw from the run's ``key``): the
+    pass-to-pass variability of a pit's impacts (:func:`~bearingsim.signals.signal_stage.pass_variability`:
+    c.v. and delay s.d. the realism's maxima times the pit's ``unbridged`` fraction; the housing
+    acceleration ``housing`` (T,) varied pass by pass and put through the sensor ``modes`` (f, zeta,
+    g) again; displacements and housing acceleration stay the ODE's) and the measurement noise
+    (:func:`~bearingsim.signals.signal_stage.measurement_noise`, the key's ``noise`` stream).
+    ``pass_times`` (n,) s.  Returns (record without noise, noise, labels: ``unbridged_fraction``,
+    ``pass_amplitude_cv_percent``, ``pass_delay_sd_percent``, ``pass_factors`` and ``pass_shifts``
+    (n + 1,) when the variability is on)."""
+    T = int(np.shape(sensor)[0])
+    labels = {}
+    out = np.asarray(sensor, float)
+    if realism.pass_variation:
+        n = int(np.size(pass_times))
+        P = max(n, 1 << max(n, 1).bit_length())          # a few padded shapes: one program per power of two
+        tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
+        st = SignalSettings(float(fs), T, pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
+                            pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
+        a, fac, shifts, cv, jit_ = _pass_variability_jit(jnp.asarray(key, jnp.uint32), jnp.asarray(housing, jnp.float64),
+                                                         jnp.asarray(sensor, jnp.float64), jnp.asarray(tp),
+                                                         jnp.float64(unbridged), jnp.stack([jnp.asarray(v, jnp.float64)
+                                                                                            for v in modes], -1), st)
+        out = np.asarray(a, float)
+        labels.update(unbridged_fraction=float(unbridged), pass_amplitude_cv_percent=100.0 * float(cv),
+                      pass_delay_sd_percent=100.0 * float(jit_), pass_factors=np.asarray(fac)[:n + 1],
+                      pass_shifts=np.asarray(shifts)[:n + 1])
+    noise = np.zeros(T)
+    if realism.noise_rms > 0.0:
+        noise = np.asarray(measurement_noise(stream_key(jnp.asarray(key, jnp.uint32), "noise"), T, realism.noise_rms, fs,
+                                             realism.noise_band), float)
+    return out, noise, labels
 
 
 class DynamicsResult(NamedTuple):
@@ -209,7 +219,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     with the shaft, a ball pit with its ball), ``duration`` (s), ``sample_rate`` (Hz),
     ``theta0`` the cage angle at t = 0 (rad); ``realism`` (:class:`Realism`, seeded by
     ``seed``): slip, speed fluctuation, noise, and the pass-to-pass variability of a pit's
-    impacts (:func:`vary_sensor`, scaled by :func:`unbridged_of`; in the sensor path).  ``scheme`` "newmark" | "heun" | "rk4",
+    impacts (:func:`finish_record`, the data set's signal stage, scaled by :func:`unbridged_of`; in the sensor path).  ``scheme`` "newmark" | "heun" | "rk4",
     ``substeps`` steps per sample (or "auto"), ``ball_iterations`` Newton steps per ball (or
     "auto": :func:`choose_ball_iterations`).  ``integrator="adaptive"``: the diffrax reference
     (``rtol``/``atol`` on displacements in um and velocities in mm/s; sensor modes in the ODE,
@@ -300,9 +310,6 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         extra = f" (quasi-static: {sol.message()[0]}, result {q_code})" if q_code else ""
         hint = result_hint(q_code, loads, bearing=bearing) if q_code else code.hint
         raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", hint, code)
-    noise = np.zeros(T)
-    if realism.noise_rms > 0.0:
-        noise = sensor_mod.measurement_noise(seed_streams(seed)[3], T, realism.noise_rms, fs, realism.noise_band)
     theta, phi, omega = motion_at(m, ts)
     rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
     balls = [None] * 4
@@ -314,9 +321,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     labels = motion_labels(m, realism)
     labels["ball_solver_error"] = float(err)
     pass_times = defect_pass_times(m, defects, ts[-1], k_spin)
-    if realism.pass_variation and code == RESULTS.successful:
-        sens = vary_sensor(ah[None, :, 0], sens[None], fs, [pass_times], realism, [u], [seed], params.modes(),
-                           [labels])[0]
+    noise = np.zeros(T)
+    if code == RESULTS.successful:
+        sens, noise, more = finish_record(key, ah[:, 0], sens, pass_times, u, params.modes(), realism, fs)
+        labels.update(more)
     return DynamicsResult(
         time=ts, cage_angle=theta, shaft_speed=omega, ring_displacement=rel,
         shaft_displacement=y[:, 0:3], housing_displacement=y[:, 3:5], housing_acceleration=ah,

@@ -14,7 +14,8 @@ import matplotlib.transforms as mtransforms
 import numpy as np
 
 from ..case.units import from_si
-from ..physics.defect import LOCATIONS
+from ..errors import InputError, InputTypeError
+from ..names import CLASSES
 from ..signals.envelope import EnvelopeSpectrum, Spectrum, defect_markers
 
 __all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer", "plot_record_spectrum"]
@@ -31,7 +32,9 @@ _MAX_LINES = 30    # event marks drawn as full-height lines up to this many in v
 def _as_signal(x, name: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
     if a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be a 1-D array of at least 2 finite samples, got shape {a.shape}")
+        raise InputError(f"{name} must be a 1-D array of at least 2 finite samples, got shape {a.shape}"
+                         + ("" if a.ndim != 1 or a.size < 2 else f" with {int(np.sum(~np.isfinite(a)))} NaN/inf"),
+                         "pass one channel of finite samples")
     return a
 
 
@@ -66,7 +69,8 @@ def plot_envelope_spectrum(spectrum: Spectrum, markers, title: str = "", fmax=No
     unit     : unit of the analysed signal; the envelope amplitude is in unit².
     """
     if not isinstance(spectrum, Spectrum):
-        raise TypeError(f"spectrum must be a Spectrum/EnvelopeSpectrum, got {type(spectrum).__name__}")
+        raise InputTypeError(f"spectrum must be a Spectrum/EnvelopeSpectrum, got {type(spectrum).__name__}",
+                             "pass the result of bearingsim.signals.envelope.envelope_spectrum()")
     if isinstance(markers, dict):
         markers = defect_markers(markers)
     markers = [(str(lab), float(f)) for lab, f in (markers or [])]
@@ -75,7 +79,8 @@ def plot_envelope_spectrum(spectrum: Spectrum, markers, title: str = "", fmax=No
         fmax = 1.2 * max(f for _, f in markers) if markers else f_nyq
     fmax = min(float(fmax), f_nyq)
     if not fmax > 0:
-        raise ValueError(f"fmax must be > 0 Hz, got {fmax}")
+        raise InputError(f"fmax must be > 0 Hz, got {fmax}",
+                         "fmax is the upper frequency limit in Hz; None for 1.2 x the highest marker")
 
     fig, ax = _new_axes(ax, (10, 4.2))
     sel = spectrum.freqs <= fmax
@@ -133,14 +138,17 @@ def plot_time_history(t, x, marks=None, title: str = "", path=None, ax=None, zoo
     t = _as_signal(t, "t")
     x = _as_signal(x, "x")
     if t.size != x.size:
-        raise ValueError(f"t and x must have the same length, got {t.size} and {x.size}")
+        raise InputError(f"t and x must have the same length, got {t.size} and {x.size}",
+                         "t holds the time (s) of each sample of x")
     if zoom is not None:
         t0, t1 = (float(v) for v in zoom)
         if not t0 < t1:
-            raise ValueError(f"zoom must be (t0, t1) with t0 < t1, got {zoom!r}")
+            raise InputError(f"zoom must be (t0, t1) with t0 < t1, got {zoom!r}",
+                             f"a window in s inside the record's {t[0]:g}–{t[-1]:g} s, or None for all of it")
         sel = (t >= t0) & (t <= t1)
         if not sel.any():
-            raise ValueError(f"zoom window {zoom!r} contains no samples (t spans {t[0]:g}–{t[-1]:g} s)")
+            raise InputError(f"zoom window {zoom!r} contains no samples (t spans {t[0]:g}–{t[-1]:g} s)",
+                             "choose (t0, t1) inside the record's time span, or None for all of it")
         t, x = t[sel], x[sel]
     else:
         t0, t1 = float(t[0]), float(t[-1])
@@ -183,9 +191,8 @@ def plot_transfer(reports, path=None):
         cm = np.asarray(r.confusion, float)
         frac = cm / np.maximum(cm.sum(1, keepdims=True), 1.0)
         ax.imshow(frac, vmin=0.0, vmax=1.0, cmap="Blues")
-        names = ("healthy",) + LOCATIONS
-        ax.set_xticks(range(4), names)
-        ax.set_yticks(range(4), names)
+        ax.set_xticks(range(len(CLASSES)), CLASSES)
+        ax.set_yticks(range(len(CLASSES)), CLASSES)
         ax.set_xlabel("predicted class")
         ax.set_ylabel("true class (real records)")
         for i in range(4):

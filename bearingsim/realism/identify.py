@@ -34,7 +34,7 @@ import numpy as np
 from ..errors import InputError
 from .fault_size import (PASS_FEATURE_NAMES, angle_from_order, line_frequency, pass_features,
                          surface_speed)
-from ..names import noun_module
+from ..names import CLASSES, noun_module
 from ..signals.features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from .records import MIN_SECONDS, check_record, read_record
 
@@ -54,7 +54,6 @@ BANK_COUNT = 400
 SLIP_MAX = 0.02
 #: the level of every interval
 LEVEL = 0.90
-CLASSES = ("healthy", "outer", "inner", "ball")
 #: a record with at least this many samples within 0.1 % of its largest magnitude is clipped
 CLIP_SAMPLES = 3
 #: the class must be this probable for a size to be given

@@ -77,6 +77,7 @@ from ..signals.background import Background
 from .background_fit import (MODULATION_HARMONICS, broadband_shape, fit_knocks, fit_lines, modulation_depths,
                              psd_resonances, shaft_speed, supply_lines)
 from ..case import case_from_dict, check_sampling, load_case, to_toml
+from ..names import CLASSES
 from ..physics.defect import LOCATIONS
 from ..errors import InputError
 from .records import UNITS, check_record, read_record
@@ -131,7 +132,7 @@ def _fit_gain(raw, fault_class, rpm, excess, fs, items=GAIN_ITEMS, seed=0, tmpdi
 
     r = copy.deepcopy(raw)
     ds = r["dataset"]
-    for c in ("healthy",) + LOCATIONS:
+    for c in CLASSES:
         ds[f"{c}_fraction"] = 1.0 if c == fault_class else 0.0
     ds.update(count=int(items), chunk=int(items), speed_rpm=[float(rpm), float(rpm)], background="none",
               signal_gain=[1.0, 1.0], seed=int(seed))

@@ -56,6 +56,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from ..errors import InputError
+from ..names import CLASS_NUMBER
 from ..keys import STREAMS, item_keys
 
 __all__ = ["NUISANCE_DEFAULTS", "INGREDIENTS", "item_signal", "ball_fault_modulation", "shaft_modulation", "nuisance_signal", "fault_level",
@@ -109,7 +111,8 @@ def settings_of(settings=None) -> dict:
     if settings:
         bad = sorted(set(settings) - set(s))
         if bad:
-            raise ValueError(f"unknown nuisance settings {', '.join(bad)}: one of {', '.join(sorted(s))}")
+            raise InputError(f"unknown nuisance settings {', '.join(bad)}: one of {', '.join(sorted(s))}",
+                             "the settings and their defaults are bearingsim.signals.nuisance.NUISANCE_DEFAULTS")
         s.update(settings)
     return s
 
@@ -313,8 +316,8 @@ def item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz, bpfo_
     labels = {}
     if on["ball_fault_model"]:
         xb, lb = ball_fault_modulation(k[0], x, fs, shaft_hz, ftf_hz, bsf_hz, s)
-        x = jnp.where(fault_class == 3, xb, x)
-        labels.update({n: jnp.where(fault_class == 3, v, 0.0) for n, v in lb.items()})
+        x = jnp.where(fault_class == CLASS_NUMBER["ball"], xb, x)
+        labels.update({n: jnp.where(fault_class == CLASS_NUMBER["ball"], v, 0.0) for n, v in lb.items()})
     g, snr = fault_level(k[1], x, background, s)
     y = jnp.where(fault_class > 0, g, 0.0) * x + background
     labels["snr_dB"] = jnp.where(fault_class > 0, snr, 0.0)

@@ -24,7 +24,8 @@ where exp(h [[A, B, 0], [0, 0, 1], [0, 0, 0]]) = [[Phi, Gamma0, Gamma1], [0, 1, 
 (A = [[0, 1], [-w^2, -2 zeta w]], B = [0, -1], C = [-w^2, -2 zeta w]).
 
 Noise (:func:`measurement_noise`) is Gaussian, white or band-limited, at a given RMS, drawn
-from ``numpy.random.default_rng(seed)`` (reproducible, per item).
+from the run's (or item's) ``jax.random`` key.  Every function here is JAX, one version for a
+single simulation, a data set item and the signal stage.
 """
 from __future__ import annotations
 
@@ -33,13 +34,12 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-import scipy.linalg
 from jax import lax
 
 from ..programs import jit
 
 __all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
-           "apply_sensor", "apply_sensor_batch", "measurement_noise", "G", "sensor_filter_device"]
+           "run_filter", "apply_sensor", "apply_sensor_batch", "measurement_noise", "G"]
 
 #: standard gravity (m/s^2), for noise levels given in g
 G = 9.80665
@@ -58,24 +58,27 @@ class SensorFilter(NamedTuple):
 
 
 def sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:
-    """FOH-exact discretisation of the modes over a step h (s), on the host (scipy's matrix
-    exponential of each mode's 4x4 augmented system: nothing to compile); concrete values only.
-    Leading batch axes of ``frequencies`` (with the same of ``damping_ratios``/``gains``) give
-    a batch of filters."""
-    f = np.atleast_1d(np.asarray(frequencies, np.float64))
-    z = np.broadcast_to(np.asarray(damping_ratios, np.float64), f.shape)
-    g = np.broadcast_to(np.asarray(gains, np.float64), f.shape)
-    h = float(h)
+    """FOH-exact discretisation of the modes over a step h (s), in JAX (jit/vmap; ``h`` may be
+    traced): the matrix exponential of each mode's 4x4 augmented system
+    (``jax.scipy.linalg.expm``), balanced first (similarity by d = (w^2, w, 1, 1/w): every entry
+    of h D A D^-1 is of the order w h), so that its scaling and squaring takes few squarings and
+    keeps full precision.  Leading batch axes of ``frequencies`` (with the same of
+    ``damping_ratios``/``gains``) give a batch of filters.  One version for a simulation's time
+    loop, a data set item's and the signal stage's (tests/oracles/sensor_numpy.py is scipy's)."""
+    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
+    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
+    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
+    h = jnp.asarray(h, jnp.float64)
     w = 2.0 * np.pi * f
-    Phi, G0, G1 = np.zeros(f.shape + (2, 2)), np.zeros(f.shape + (2,)), np.zeros(f.shape + (2,))
-    for idx in np.ndindex(f.shape):
-        wk, zk = w[idx], z[idx]
-        M = np.zeros((4, 4))
-        M[0, 1], M[1, 0], M[1, 1], M[1, 2], M[2, 3] = 1.0, -wk * wk, -2.0 * zk * wk, -1.0, 1.0
-        E = scipy.linalg.expm(M * h)
-        Phi[idx], G0[idx], G1[idx] = E[:2, :2], E[:2, 2], E[:2, 3] / h
-    C = np.stack([-w * w, -2.0 * z * w], axis=-1)
-    return SensorFilter(*(jnp.asarray(a) for a in (Phi, G0, G1, C, g, w, z)))
+    one, zero = jnp.ones_like(w), jnp.zeros_like(w)
+    A = jnp.stack([jnp.stack([zero, one, zero, zero], -1), jnp.stack([-w * w, -2.0 * z * w, -one, zero], -1),
+                   jnp.stack([zero, zero, zero, one], -1), jnp.stack([zero, zero, zero, zero], -1)], -2)
+    d = jnp.stack([w * w, w, one, 1.0 / w], -1)
+    Ab = A * d[..., :, None] / d[..., None, :]
+    Eb = jax.vmap(jax.scipy.linalg.expm)(Ab.reshape((-1, 4, 4)) * h).reshape(A.shape)
+    E = Eb * d[..., None, :] / d[..., :, None]
+    C = jnp.stack([-w * w, -2.0 * z * w], axis=-1)
+    return SensorFilter(E[..., :2, :2], E[..., :2, 2], E[..., :2, 3] / h, C, g, w, z)
 
 
 def filter_init(flt: SensorFilter):
@@ -110,7 +113,9 @@ def filter_output(flt: SensorFilter, s, u):
     return u + jnp.sum(flt.gain * zdd)
 
 
-def _run_filter(flt: SensorFilter, u):
+def run_filter(flt: SensorFilter, u):
+    """The sensor signal of housing acceleration ``u`` (T,) through ``flt`` (one record; jit/vmap),
+    modes at rest at the first sample, the input linear between samples."""
     def body(carry, u1):
         s, u0 = carry
         s = filter_update(flt, s, u0, u1)
@@ -120,14 +125,14 @@ def _run_filter(flt: SensorFilter, u):
     return jnp.concatenate([jnp.atleast_1d(filter_output(flt, filter_init(flt), u[0])), out])
 
 
-_run_filter_jit = jit(_run_filter)
-_run_filter_batch_jit = jit(jax.vmap(_run_filter))
+_run_filter_jit = jit(run_filter)
+_run_filter_batch_jit = jit(jax.vmap(run_filter))
 
 
 def apply_sensor(housing_acceleration, h, frequencies, damping_ratios, gains=1.0):
     """The sensor signal of a housing-acceleration record sampled every h (s), modes at rest at
-    the first sample (the modes discretised on the host, then a JAX scan, compiled once per
-    record length and mode count); for signals outside a simulation (e.g. a different sensor
+    the first sample (:func:`sensor_filter`, then a JAX scan, compiled once per record length
+    and mode count); for signals outside a simulation (e.g. a different sensor
     path on a stored run, or a record varied pass by pass: the step is then the sample
     interval, the input linear between samples)."""
     u = jnp.asarray(housing_acceleration, jnp.float64)
@@ -139,41 +144,23 @@ def apply_sensor_batch(housing_acceleration, h, frequencies, damping_ratios, gai
     (M,) for all or (N, M) per record (one program for the batch)."""
     u = jnp.asarray(housing_acceleration, jnp.float64)
     n = u.shape[0]
-    f = np.atleast_1d(np.asarray(frequencies, np.float64))
-    f = np.broadcast_to(f, (n,) + f.shape[-1:])
-    z = np.broadcast_to(np.asarray(damping_ratios, np.float64), f.shape)
-    g = np.broadcast_to(np.asarray(gains, np.float64), f.shape)
+    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
+    f = jnp.broadcast_to(f, (n,) + f.shape[-1:])
+    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
+    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
     return _run_filter_batch_jit(sensor_filter(f, z, g, h), u)
 
 
-def measurement_noise(rng: np.random.Generator, n, rms, fs=None, band=None) -> np.ndarray:
-    """n samples of zero-mean Gaussian noise with the given RMS (m/s^2).  ``band`` = (lo, hi) Hz
-    (with ``fs``): the noise is band-limited by zeroing its spectrum outside the band, then
-    rescaled to the RMS; None: white up to fs/2."""
-    x = rng.standard_normal(n)
+def measurement_noise(key, n, rms, fs=None, band=None):
+    """Measurement noise from a ``jax.random`` key (a data set item's or a simulation's ``noise``
+    stream, :data:`bearingsim.keys.STREAMS`): ``n`` Gaussian samples, band-limited to ``band`` =
+    (lo, hi) Hz by zeroing the spectrum outside it (``fs`` needed), scaled to ``rms`` (m/s^2);
+    None: white up to fs/2."""
+    x = jax.random.normal(key, (int(n),), jnp.float64)
     if band is not None and n > 1:
         lo, hi = band
-        X = np.fft.rfft(x)
-        f = np.fft.rfftfreq(n, 1.0 / float(fs))
-        X[(f < lo) | (f > hi)] = 0.0
-        x = np.fft.irfft(X, n)
-    s = float(np.sqrt(np.mean(x * x))) if n else 0.0
-    return x * (float(rms) / s) if s > 0 else x * 0.0
-
-
-def sensor_filter_device(frequencies, damping_ratios, gains, h) -> SensorFilter:
-    """:func:`sensor_filter` as a traceable JAX function (jit/vmap: the matrix exponential of
-    each mode's augmented system by :func:`jax.scipy.linalg.expm`), for filters built inside a
-    compiled program from per-item modes ``(M,)``; ``h`` may be traced."""
-    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
-    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
-    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
-    w = 2.0 * np.pi * f
-    zero, one = jnp.zeros_like(w), jnp.ones_like(w)
-    M = jnp.stack([jnp.stack([zero, one, zero, zero], -1),
-                   jnp.stack([-w * w, -2.0 * z * w, -one, zero], -1),
-                   jnp.stack([zero, zero, zero, one], -1),
-                   jnp.stack([zero, zero, zero, zero], -1)], -2)
-    E = jax.vmap(jax.scipy.linalg.expm)((M * h).reshape((-1, 4, 4))).reshape(M.shape)
-    C = jnp.stack([-w * w, -2.0 * z * w], axis=-1)
-    return SensorFilter(E[..., :2, :2], E[..., :2, 2], E[..., :2, 3] / h, C, g, w, z)
+        X = jnp.fft.rfft(x)
+        f = jnp.fft.rfftfreq(int(n), 1.0 / float(fs))
+        x = jnp.fft.irfft(jnp.where((f < lo) | (f > hi), 0.0, X), int(n))
+    s = jnp.sqrt(jnp.mean(x * x))
+    return jnp.where(s > 0, x * (rms / jnp.where(s > 0, s, 1.0)), 0.0)

@@ -8,9 +8,11 @@ What it does to one item (the order of :func:`finish_items`):
    :func:`bearingsim.signals.passes.vary_passes`): log-normal per-pass factors (c.v. = the [dynamics]
    maximum x the pit's unbridged fraction), Gaussian delays, and the intermittent strike of a
    ball pit (:func:`strike_factors`); a varied row is put through the item's sensor modes again
-   (:func:`discretise_modes`, :func:`run_modes`: the first-order-hold filter of
-   :mod:`bearingsim.signals.sensor`, its matrix exponential in JAX);
-2. the measurement noise (:func:`measurement_noise`: white or band-limited, at an RMS);
+   (:func:`bearingsim.signals.sensor.sensor_filter`, :func:`~bearingsim.signals.sensor.run_filter`:
+   the first-order-hold filter every simulation uses); :func:`pass_variability` is this step for
+   one record (a single simulation applies it too);
+2. the measurement noise (:func:`bearingsim.signals.sensor.measurement_noise`: white or
+   band-limited, at an RMS);
 3. the machine's background (:func:`draw_background`: the same ranges as
    :func:`bearingsim.signals.background.random_background`; :func:`background_record`: the same
    synthesis as :func:`bearingsim.signals.background.background_signal`: shaft and supply lines,
@@ -47,16 +49,19 @@ import numpy as np
 
 from .. import keys as _keys
 from . import nuisance as _nuisance
+from ..errors import InputError
+from ..names import CLASS_NUMBER
 from .background import BACKGROUND_DEFAULTS, Background
 from ..keys import item_keys, stream_key
-from .sensor import SensorFilter, filter_init, filter_output, filter_update
+from .sensor import measurement_noise, run_filter, sensor_filter
 from ..programs import jit
 
 __all__ = ["STREAMS", "SignalSettings", "ItemDraws", "BackgroundDraws", "item_keys", "stream_key",
            "draw_items", "draw_background", "background_draws", "background_record", "synthesize_background",
            "background_labels", "poisson_capped", "shape_noise", "psd_grid", "pass_factors", "pass_shifts",
            "strike_factors",
-           "vary_passes", "discretise_modes", "run_modes", "measurement_noise", "fault_level", "finish_item",
+           "vary_passes", "measurement_noise", "fault_level", "pass_variability",
+           "finish_item",
            "finish_items", "LABELS"]
 
 #: the item key's sub-streams (``jax.random.fold_in(key, n)``): the one registry, :data:`bearingsim.keys.STREAMS`
@@ -110,12 +115,16 @@ class SignalSettings:
         for name in self.__dataclass_fields__:
             object.__setattr__(self, name, _hashable(getattr(self, name)))
         if self.background not in ("none", "random", "machine"):
-            raise ValueError(f"background must be 'none', 'random' or 'machine', got {self.background!r}")
+            raise InputError(f"background must be 'none', 'random' or 'machine', got {self.background!r}",
+                             "'random' draws a background per record, 'machine' uses the machine's Background")
         bad = [k for k in self.ingredients if k not in _nuisance.INGREDIENTS]
         if bad:
-            raise ValueError(f"unknown realism ingredient {bad[0]!r}: one of {', '.join(_nuisance.INGREDIENTS)}")
+            raise InputError(f"unknown realism ingredient(s) {', '.join(map(repr, bad))}: "
+                             f"one of {', '.join(_nuisance.INGREDIENTS)}", "check the spelling of ingredients")
         if self.background == "machine" and self.machine is None:
-            raise ValueError("background 'machine' needs the machine's Background")
+            raise InputError("background 'machine' needs the machine's Background, got machine=None",
+                             "pass the machine's Background (bearingsim.signals.background) as machine, or use "
+                             "background='random'")
 
     @classmethod
     def from_dataset(cls, ds: dict, fs, samples, realism, modes, machine: Background | None = None):
@@ -187,7 +196,7 @@ def _draw_item(key, fault_class, s: SignalSettings) -> ItemDraws:
     gain = _logu(kr[1], *s.signal_gain)
     snr = (jnp.where(fault_class > 0, _uniform(kr[2], *s.fault_snr_dB), 0.0) if s.fault_snr_dB is not None
            else jnp.asarray(0.0))
-    strike = jnp.where(fault_class == 3, _uniform(kr[3], *s.strike_probability), 1.0)
+    strike = jnp.where(fault_class == CLASS_NUMBER["ball"], _uniform(kr[3], *s.strike_probability), 1.0)
     f0, z0, g0 = (jnp.asarray(v, jnp.float64) for v in s.modes)
     M = f0.shape[0]
     kt = jax.random.split(stream_key(key, "transfer"), 3)
@@ -497,52 +506,6 @@ def vary_passes(x, fs, pass_times, factors, shifts, lead=0.15, taper=0.1):
 # --- sensor path and noise ------------------------------------------------------------------
 
 
-def discretise_modes(frequencies, damping_ratios, gains, h) -> SensorFilter:
-    """:func:`bearingsim.signals.sensor.sensor_filter` in JAX (the 4x4 matrix exponentials with
-    ``jax.scipy.linalg.expm``): traceable, so per-item modes stay on the device."""
-    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
-    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
-    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
-    w = 2.0 * np.pi * f
-    one, zero = jnp.ones_like(w), jnp.zeros_like(w)
-    A = jnp.stack([jnp.stack([zero, one, zero, zero], -1), jnp.stack([-w * w, -2.0 * z * w, -one, zero], -1),
-                   jnp.stack([zero, zero, zero, one], -1), jnp.stack([zero, zero, zero, zero], -1)], -2)
-    # balanced first (similarity by d = (w^2, w, 1, 1/w): every entry of h D A D^-1 is of the order
-    # w h), so that the scaling and squaring of expm takes few squarings and keeps full precision
-    d = jnp.stack([w * w, w, one, 1.0 / w], -1)
-    Ab = A * d[..., :, None] / d[..., None, :]
-    Eb = jax.vmap(jax.scipy.linalg.expm)(Ab.reshape((-1, 4, 4)) * float(h)).reshape(A.shape)
-    E = Eb * d[..., None, :] / d[..., :, None]
-    C = jnp.stack([-w * w, -2.0 * z * w], axis=-1)
-    return SensorFilter(E[..., :2, :2], E[..., :2, 2], E[..., :2, 3] / float(h), C, g, w, z)
-
-
-def run_modes(flt: SensorFilter, u):
-    """The sensor signal of housing acceleration ``u`` (T,) through ``flt`` (one item), modes at
-    rest at the first sample, the input linear between samples
-    (:func:`bearingsim.signals.sensor.apply_sensor`)."""
-    def body(carry, u1):
-        s, u0 = carry
-        s = filter_update(flt, s, u0, u1)
-        return (s, u1), filter_output(flt, s, u1)
-
-    _, out = jax.lax.scan(body, (filter_init(flt), u[0]), u[1:])
-    return jnp.concatenate([jnp.atleast_1d(filter_output(flt, filter_init(flt), u[0])), out])
-
-
-def measurement_noise(key, n, rms, fs=None, band=None):
-    """:func:`bearingsim.signals.sensor.measurement_noise` from a key: ``n`` Gaussian samples, band-limited
-    to ``band`` = (lo, hi) Hz by zeroing the spectrum outside it (``fs`` needed), scaled to ``rms``."""
-    x = jax.random.normal(key, (int(n),), jnp.float64)
-    if band is not None and n > 1:
-        lo, hi = band
-        X = jnp.fft.rfft(x)
-        f = jnp.fft.rfftfreq(int(n), 1.0 / float(fs))
-        x = jnp.fft.irfft(jnp.where((f < lo) | (f > hi), 0.0, X), int(n))
-    s = jnp.sqrt(jnp.mean(x * x))
-    return jnp.where(s > 0, x * (rms / jnp.where(s > 0, s, 1.0)), 0.0)
-
-
 # --- fault level ----------------------------------------------------------------------------
 
 
@@ -563,17 +526,21 @@ def fault_level(a, background, gain, snr_dB, use_snr):
 # --- one item, all items --------------------------------------------------------------------
 
 
-def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
-                s: SignalSettings, frequencies=None):
-    """One item's record and labels (see the module docstring; :func:`finish_items`).
-    ``frequencies``: the item's (FTF, BPFO, BPFI, BSF) in Hz (needed by issue 26's
-    ingredients, :attr:`SignalSettings.ingredients`)."""
-    T = housing.shape[0]
+def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_probability, s: SignalSettings):
+    """One record's pass-to-pass variability (the first step of :func:`finish_item`; a single
+    simulation, :func:`bearingsim.dynamics.simulate`, applies the same): the housing acceleration
+    ``housing`` (T,) varied pass by pass (:func:`vary_passes`: factors of c.v. ``s.pass_cv_max``
+    x ``unbridged``, delays of s.d. ``s.pass_delay_max`` x ``unbridged`` mean pass intervals, the
+    strikes of probability ``strike_probability``, all drawn from the key's ``passes`` and
+    ``strike`` streams) and put through the sensor ``modes`` (M, 3) (f Hz, zeta, gain) again;
+    a record whose pit is bridged and always strikes keeps ``sensor``.  ``pass_times`` (P,) s,
+    sorted, +inf padded.  Returns (sensor record, factors (P + 1,), shifts (P + 1,) s, c.v.,
+    delay fraction)."""
     fs = s.fs
     P = pass_times.shape[0]
     cv = s.pass_cv_max * unbridged
     jitter = s.pass_delay_max * unbridged
-    p = draws.strike_probability
+    p = strike_probability
     kp = jax.random.split(stream_key(key, "passes"))
     fac = pass_factors(kp[0], P + 1, cv)
     shifts = pass_shifts(kp[1], pass_times, jitter)
@@ -582,11 +549,23 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
     varied = jnp.where(active, vary_passes(housing, fs, pass_times, fac, shifts, s.pass_lead, s.pass_taper),
                        housing)
     if s.pass_cv_max > 0 or s.pass_delay_max > 0 or s.strike_probability[0] < 1.0:
-        f, z, g = draws.modes[:, 0], draws.modes[:, 1], draws.modes[:, 2]
-        y = run_modes(discretise_modes(f, z, g, 1.0 / fs), varied)
+        f, z, g = modes[:, 0], modes[:, 1], modes[:, 2]
+        y = run_filter(sensor_filter(f, z, g, 1.0 / fs), varied)
         a = jnp.where((unbridged > 0.0) | (p < 1.0), y, sensor)
     else:
         a = sensor
+    return a, fac, shifts, cv, jitter
+
+
+def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
+                s: SignalSettings, frequencies=None):
+    """One item's record and labels (see the module docstring; :func:`finish_items`).
+    ``frequencies``: the item's (FTF, BPFO, BPFI, BSF) in Hz (needed by issue 26's
+    ingredients, :attr:`SignalSettings.ingredients`)."""
+    T = housing.shape[0]
+    fs = s.fs
+    a, _, _, cv, jitter = pass_variability(key, housing, sensor, pass_times, unbridged, draws.modes,
+                                           draws.strike_probability, s)
     on = set(s.ingredients)
     if on:
         ns = _nuisance.settings_of(dict(s.nuisance))
@@ -595,7 +574,7 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
     if "ball_fault_model" in on:     # a ball pit as real damaged balls show it (the fault part only)
         xb, _ = _nuisance.ball_fault_modulation(kn[0], a - jnp.mean(a), fs, shaft_hz, ftf, jnp.where(bsf > 0, bsf, 1.0),
                                                 ns)
-        a = jnp.where(fault_class == 3, xb, a)
+        a = jnp.where(fault_class == CLASS_NUMBER["ball"], xb, a)
     if s.noise_rms > 0.0:
         a = a + measurement_noise(stream_key(key, "noise"), T, s.noise_rms, fs, s.noise_band)
     labels = {"pass_amplitude_cv_percent": 100.0 * cv, "pass_delay_sd_percent": 100.0 * jitter}
