@@ -4,9 +4,10 @@ bounds)."""
 import numpy as np
 import pytest
 
-from bearingsim.signals.background import Background, background_signal, random_background, shaped_noise
+from bearingsim.signals.background import Background
+from oracles.background_numpy import background_signal, random_background, shaped_noise
 from bearingsim.signals.features import FEATURE_NAMES, FaultOrders, cut_windows, fault_orders, octave_bands, window_features
-from bearingsim.signals.passes import pass_variation, strike_mask
+from oracles.passes_numpy import pass_variation, strike_mask
 
 FS = 12000.0
 FR = 29.95

@@ -1,5 +1,5 @@
 """bearingsim calibrate (bearingsim.realism.machine): the fit recovers a synthetic machine whose background
-is known (the independent truth: bearingsim.signals.background.background_signal with chosen
+is known (the independent truth: the NumPy synthesis tests/oracles/background_numpy.py with chosen
 parameters), the written spec loads and runs as a data set, the signal gain of a fault record
 whose level is known, and the real CWRU normal record when ../shared/realdata is present."""
 from pathlib import Path
@@ -8,7 +8,8 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim.signals.background import Background, background_signal
+from bearingsim.signals.background import Background
+from oracles.background_numpy import background_signal
 from bearingsim.case import case_from_dict, load_case, parse_case
 from bearingsim.app.cli import main
 from bearingsim.datasets import make_dataset

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from bearingsim.realism import rig_record as rl
+from oracles import passes_numpy
 
 INCH = 25.4e-3
 
@@ -68,37 +69,40 @@ def test_pit_effective_depth_bounds_and_growth(cwru):
 
 
 def test_pass_factors_and_cv():
+    """The NumPy oracle's per-pass factors (tests/oracles/passes_numpy.py; the package's JAX ones
+    are tested in tests/test_signal_stage.py): mean square 1, c.v. as asked."""
     rng = np.random.default_rng(0)
-    f = rl.pass_factors(rng, 200_000, 0.5)
+    f = passes_numpy.pass_factors(rng, 200_000, 0.5)
     assert np.mean(f * f) == pytest.approx(1.0, abs=0.02)           # ~10 sigma of the estimator
     assert np.std(f) / np.mean(f) == pytest.approx(0.5, rel=0.02)
-    assert np.all(rl.pass_factors(rng, 10, 0.0) == 1.0)
+    assert np.all(passes_numpy.pass_factors(rng, 10, 0.0) == 1.0)
     with pytest.raises(ValueError):
-        rl.pass_factors(rng, 3, -0.1)
+        passes_numpy.pass_factors(rng, 3, -0.1)
     assert rl.pass_cv(0.2e-3, 0.1e-3, 0.6) == 0.0                    # bridged by the contact
     assert rl.pass_cv(0.4e-3, 0.1e-3, 0.6) == pytest.approx(0.3)
     assert rl.pass_cv(0.0, 0.1e-3, 0.6) == 0.0
 
 
 def test_vary_passes_is_a_partition_of_unity():
+    """The oracle's windows (the JAX vary_passes equals them: tests/test_signal_stage.py)."""
     fs = 48000.0
     rng = np.random.default_rng(1)
     x = rng.standard_normal(48000) + 3.0
     tp = 0.004 + np.arange(100) / 107.4
     tp = tp[tp < 1.0]
-    assert np.allclose(rl.vary_passes(x, fs, tp, np.ones(tp.size + 1)), x, atol=1e-12)
-    assert np.allclose(rl.vary_passes(x, fs, tp, np.full(tp.size + 1, 2.0)), 2 * (x - x.mean()) + x.mean())
+    assert np.allclose(passes_numpy.vary_passes(x, fs, tp, np.ones(tp.size + 1)), x, atol=1e-12)
+    assert np.allclose(passes_numpy.vary_passes(x, fs, tp, np.full(tp.size + 1, 2.0)), 2 * (x - x.mean()) + x.mean())
     # an impulse well inside pass k's window is scaled by factor k
     imp = np.zeros(48000)
     k = 10
     i = int(round((tp[k] + 0.3 / 107.4) * fs))
     imp[i] = 1.0
     fac = np.arange(tp.size + 1, dtype=float)          # factors[0]: before the first pass
-    y = rl.vary_passes(imp, fs, tp, fac)
+    y = passes_numpy.vary_passes(imp, fs, tp, fac)
     m = imp.mean()
     assert y[i] == pytest.approx((1 - m) * fac[k + 1] + m, rel=1e-9)
     with pytest.raises(ValueError, match="factors"):
-        rl.vary_passes(x, fs, tp, np.ones(3))
+        passes_numpy.vary_passes(x, fs, tp, np.ones(3))
 
 
 def test_decimate_record_anti_alias():
@@ -232,7 +236,7 @@ def test_engine_pass_variability_acts_on_the_sensor_path_only(cwru_runs):
     lab = r.realism
     for k in ("housing_acceleration", "ring_displacement", "noise", "cage_angle"):
         np.testing.assert_array_equal(getattr(r, k), getattr(r0, k))
-    a = rl.vary_passes(r.housing_acceleration[:, 0], fs, r.pass_times, lab["pass_factors"], lab["pass_shifts"])
+    a = passes_numpy.vary_passes(r.housing_acceleration[:, 0], fs, r.pass_times, lab["pass_factors"], lab["pass_shifts"])
     f, z, g = (np.asarray(v) for v in case_params(case).modes())
     ref = np.asarray(apply_sensor(a, 1 / fs, f, z, g)) + r.noise
     scale = np.abs(ref).max()

@@ -6,9 +6,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim.signals import passes, sensor
+from bearingsim.signals import sensor
+from oracles import passes_numpy as passes
 from bearingsim.signals import signal_stage as ss
-from bearingsim.signals.background import BACKGROUND_DEFAULTS, Background, background_signal, random_background
+from bearingsim.signals.background import BACKGROUND_DEFAULTS, Background
+from oracles.background_numpy import background_signal, random_background
 from bearingsim.dynamics import Realism
 
 FS = 12000.0

@@ -79,13 +79,6 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     return pit_unbridged_fraction(host, bearing, j, sp.location, float(sp.length(bearing))), True
 
 
-def _pass_variability(key, housing, sensor, pass_times, unbridged, modes, settings):
-    return pass_variability(key, housing, sensor, pass_times, unbridged, modes, jnp.float64(1.0), settings)
-
-
-_pass_variability_jit = jit(_pass_variability)
-
-
 def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, fs):
     """A simulation's sensor record after the time loop, as a data set item's signal stage makes
     it (:mod:`bearingsim.signals.signal_stage`, every draw from the run's ``key``): the
@@ -106,10 +99,11 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
         tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
         st = SignalSettings(float(fs), T, pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
                             pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
-        a, fac, shifts, cv, jit_ = _pass_variability_jit(jnp.asarray(key, jnp.uint32), jnp.asarray(housing, jnp.float64),
-                                                         jnp.asarray(sensor, jnp.float64), jnp.asarray(tp),
-                                                         jnp.float64(unbridged), jnp.stack([jnp.asarray(v, jnp.float64)
-                                                                                            for v in modes], -1), st)
+        a, fac, shifts, cv, jit_ = pass_variability(jnp.asarray(key, jnp.uint32), jnp.asarray(housing, jnp.float64),
+                                                    jnp.asarray(sensor, jnp.float64), jnp.asarray(tp),
+                                                    jnp.float64(unbridged), jnp.stack([jnp.asarray(v, jnp.float64)
+                                                                                       for v in modes], -1),
+                                                    jnp.float64(1.0), st)
         out = np.asarray(a, float)
         labels.update(unbridged_fraction=float(unbridged), pass_amplitude_cv_percent=100.0 * float(cv),
                       pass_delay_sd_percent=100.0 * float(jit_), pass_factors=np.asarray(fac)[:n + 1],

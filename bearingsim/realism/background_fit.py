@@ -1,5 +1,5 @@
 """Fits of a machine's background vibration to a record (the inverse of
-:func:`bearingsim.signals.background.background_signal`; used by ``bearingsim calibrate``,
+``background_signal`` of the NumPy oracle (tests/oracles/background_numpy.py); used by ``bearingsim calibrate``,
 :mod:`bearingsim.realism.machine`, whose docstring states every method).  NumPy / SciPy on arrays in
 m/s^2 and Hz; no files."""
 from __future__ import annotations

@@ -30,8 +30,8 @@ Pass-to-pass variability
     free and re-engages at the exit edge with the ball's momentary lateral position and spin.
     One fitted constant each: the [dynamics] keys ``pass_amplitude_cv_max_percent`` and
     ``pass_delay_sd_max_percent`` of the CWRU cases (the engine applies them,
-    :func:`pass_variation`, to the sensor path of :func:`bearingsim.dynamics.simulate` and of the
-    data sets).
+    :func:`bearingsim.signals.signal_stage.pass_variability`, to the sensor path of
+    :func:`bearingsim.dynamics.simulate` and of the data sets).
 
 Acquisition
     The 12 kHz CWRU records are acquired with an anti-alias filter (their spectra fall steeply
@@ -42,18 +42,18 @@ Everything is seeded; :func:`sensor_record` returns the record and the labels of
 """
 from __future__ import annotations
 
-from typing import NamedTuple
-
+import jax.numpy as jnp
 import numpy as np
 import scipy.signal as ss
 
+from ..dynamics import DynamicsParameters, Realism, simulate
 from ..errors import InputError
 from ..physics.pit import (  # noqa: F401  (re-exported: the record pipeline's vocabulary)
     Contact, PIT_LOCATIONS, contact_of, contact_at, PitDepth, pit_load_fraction, pit_depth,
     pit_effective_depth, pit_depth_of_solution, unbridged_fraction, pit_unbridged_fraction, pass_cv)
-from ..signals.passes import pass_factors, pass_variation, vary_passes  # noqa: F401
-
-
+from ..keys import item_keys
+from ..signals.sensor import apply_sensor
+from ..signals.signal_stage import SignalSettings, pass_variability
 
 __all__ = [
     "Contact",
@@ -67,10 +67,7 @@ __all__ = [
     "pit_depth_of_solution",
     "unbridged_fraction",
     "pit_unbridged_fraction",
-    "pass_variation",
     "pass_cv",
-    "pass_factors",
-    "vary_passes",
     "decimate_record",
     "sensor_record",
 ]
@@ -95,22 +92,34 @@ def decimate_record(x, fs, fs_out):
 def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
     """(record in m/s^2, sample rate, labels) of a :class:`bearingsim.dynamics.DynamicsResult`.
 
-    The housing acceleration (x) gets the pass-to-pass factors and delays (:func:`vary_passes`;
-    factors of coefficient of variation ``cv``, Gaussian delays of standard deviation ``jitter``
-    times the mean pass interval, both drawn from ``seed``), goes through the sensor modes of ``params`` (:func:`bearingsim.signals.sensor.apply_sensor`,
-    exact first-order hold at the sample interval) and gets the run's own measurement noise
-    (``result.noise``); then it is decimated to ``fs_out`` when given.  With ``cv = 0`` this is
-    the engine's ``sensor_acceleration`` (up to the filter's discretisation step).
+    The housing acceleration (x) goes through the sensor modes of ``params``
+    (:func:`bearingsim.signals.sensor.apply_sensor`, exact first-order hold at the sample
+    interval), with the pass-to-pass factors and delays of the signal stage
+    (:func:`bearingsim.signals.signal_stage.pass_variability`: factors of coefficient of variation
+    ``cv``, Gaussian delays of standard deviation ``jitter`` times the mean pass interval, both
+    drawn from the key of item 0 of a run seeded ``seed``), and gets the run's own measurement
+    noise (``result.noise``); then it is decimated to ``fs_out`` when given.  With ``cv = 0`` and
+    ``jitter = 0`` this is the engine's ``sensor_acceleration`` (up to the filter's
+    discretisation step).
     """
-    from ..signals.sensor import apply_sensor
-
     t = np.asarray(result.time)
     fs = 1.0 / float(t[1] - t[0])
     a_h = np.asarray(result.housing_acceleration)[:, 0]
     tp = np.asarray(result.pass_times, dtype=float)
-    a, fac, shifts = pass_variation(a_h, fs, tp, cv, jitter, seed)
-    f, z, g = (np.asarray(v) for v in params.modes())
-    y = np.asarray(apply_sensor(a, 1.0 / fs, f, z, g))
+    if not (np.isfinite(cv) and cv >= 0 and np.isfinite(jitter) and jitter >= 0):
+        raise InputError(f"cv and jitter must be >= 0, got {cv}, {jitter}",
+                         "cv: coefficient of variation of the pass factors; jitter: delay s.d. / pass interval")
+    f, z, g = (np.asarray(v, float) for v in params.modes())
+    y = np.asarray(apply_sensor(a_h, 1.0 / fs, f, z, g))
+    n = tp.size
+    P = 1 << max(n, 1).bit_length()                     # a few padded shapes: one program per power of two
+    tpp = np.concatenate([tp, np.full(P - n, np.inf)])
+    st = SignalSettings(float(fs), int(a_h.size), pass_cv_max=float(cv), pass_delay_max=float(jitter))
+    modes = np.stack(np.broadcast_arrays(f, z, g), -1)
+    y, fac, shifts, _, _ = pass_variability(item_keys(seed, [0])[0], jnp.asarray(a_h), jnp.asarray(y),
+                                            jnp.asarray(tpp), jnp.float64(1.0), jnp.asarray(modes), jnp.float64(1.0), st)
+    y = np.asarray(y, float)
+    fac, shifts = np.asarray(fac)[:n + 1], np.asarray(shifts)[:n + 1]
     noise = getattr(result, "noise", None)
     if noise is not None:
         y = y + np.asarray(noise)
@@ -133,8 +142,6 @@ def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv
     sensor acceleration, decimated to ``fs_out`` when given; ``labels`` are the run's realism
     labels (``result.realism``).  ``duration``/``sample_rate``/``seed`` default to the case's.
     """
-    from ..dynamics import DynamicsParameters, Realism, simulate
-
     d = dict(case.dynamics_settings())
     d.update(overrides or {})
     if pass_cv_max is not None:

@@ -18,6 +18,8 @@ Conventions
   grid spacing, which makes the 3-point log-parabolic peak interpolation of
   :func:`peak_frequency` accurate to < 0.002 of a native bin for a Hann window
   (without padding its bias reaches 0.016 bin).
+* ``scipy.signal`` is imported by the functions that filter, at their first call:
+  the modules that import this one (the workflows, the figures) load no SciPy.
 """
 from __future__ import annotations
 
@@ -25,7 +27,6 @@ from dataclasses import asdict, dataclass
 from numbers import Integral, Real
 
 import numpy as np
-import scipy.signal as ss
 
 from ..errors import InputError, InputTypeError
 
@@ -126,6 +127,8 @@ def bandpass(x, fs, f_lo, f_hi, order: int = 4) -> np.ndarray:
     phase is zero and the magnitude response is squared.  Requires
     ``0 < f_lo < f_hi < fs/2``.
     """
+    import scipy.signal as ss
+
     fs = _check_fs(fs)
     f_lo, f_hi = _check_band(f_lo, f_hi, fs)
     if isinstance(order, (bool, np.bool_)) or not isinstance(order, Integral) or order < 1:
@@ -152,6 +155,8 @@ def squared_envelope(x, fs, band=None) -> np.ndarray:
     so the envelope spectrum has no line at 0 Hz whose leakage would mask the
     low-order defect lines.
     """
+    import scipy.signal as ss
+
     fs = _check_fs(fs)
     x = _check_signal(x)
     b = _unpack_band(band, fs)
@@ -197,6 +202,8 @@ class EnvelopeSpectrum(Spectrum):
 
 
 def _spectrum(x, fs, window, nfft, band, cls):
+    import scipy.signal as ss
+
     n = x.size
     if nfft is None:
         nfft = 2 * n
@@ -340,6 +347,8 @@ def harmonic_peaks(spectrum: Spectrum, f0, n: int = 5, rel_window: float = 0.05)
 # --------------------------------------------------------------------------- band selection
 def _band_kurtosis(x, fs, edges, trim):
     """Envelope kurtosis  E[e^4]/E[e^2]^2 - 2  (e = |analytic signal|) of each band."""
+    import scipy.signal as ss
+
     k = np.empty(len(edges))
     for i, (lo, hi) in enumerate(edges):
         e2 = np.abs(ss.hilbert(bandpass(x, fs, lo, hi)))[trim: x.size - trim] ** 2
@@ -521,6 +530,8 @@ def record_metrics(x, fs, shaft_hz, fault_order, band=(2500.0, 5500.0),
     Both peak-over-median figures grow with record length (the line is coherent, the floor is
     not: about +10 log10(T2/T1) dB), so compare records of equal duration.
     """
+    import scipy.signal as ss
+
     fs = _check_fs(fs)
     x = _check_signal(x, min_len=16)
     shaft_hz = _check_freq(shaft_hz, "shaft_hz")

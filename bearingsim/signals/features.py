@@ -41,6 +41,7 @@ import scipy.signal as ss
 
 from ..errors import InputError
 from ..physics.defect import LOCATIONS
+from ..physics.kinematics import defect_frequencies
 
 __all__ = ["FaultOrders", "fault_orders", "FEATURE_NAMES", "window_features", "cut_windows", "octave_bands"]
 
@@ -57,8 +58,6 @@ class FaultOrders(NamedTuple):
 def fault_orders(bearing, alpha=None) -> FaultOrders:
     """The bearing's fault orders (MODEL.md section 8) at ``alpha`` (default: its free contact
     angle)."""
-    from ..physics.kinematics import defect_frequencies
-
     f = defect_frequencies(bearing, 1.0, alpha)
     return FaultOrders(float(f.bpfo), float(f.bpfi), float(f.two_bsf), float(f.ftf))
 

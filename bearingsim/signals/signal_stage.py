@@ -5,7 +5,7 @@ functions of the item's ``jax.random`` key, vmapped over the items of a chunk an
 What it does to one item (the order of :func:`finish_items`):
 
 1. pass-to-pass variability of the defect's impacts (:func:`vary_passes`, the JAX twin of
-   :func:`bearingsim.signals.passes.vary_passes`): log-normal per-pass factors (c.v. = the [dynamics]
+   ``vary_passes`` of the NumPy oracle (tests/oracles/passes_numpy.py)): log-normal per-pass factors (c.v. = the [dynamics]
    maximum x the pit's unbridged fraction), Gaussian delays, and the intermittent strike of a
    ball pit (:func:`strike_factors`); a varied row is put through the item's sensor modes again
    (:func:`bearingsim.signals.sensor.sensor_filter`, :func:`~bearingsim.signals.sensor.run_filter`:
@@ -14,8 +14,8 @@ What it does to one item (the order of :func:`finish_items`):
 2. the measurement noise (:func:`bearingsim.signals.sensor.measurement_noise`: white or
    band-limited, at an RMS);
 3. the machine's background (:func:`draw_background`: the same ranges as
-   :func:`bearingsim.signals.background.random_background`; :func:`background_record`: the same
-   synthesis as :func:`bearingsim.signals.background.background_signal`: shaft and supply lines,
+   ``random_background`` of the NumPy oracle (tests/oracles/background_numpy.py); :func:`background_record`: the same
+   synthesis as ``background_signal`` of the NumPy oracle (tests/oracles/background_numpy.py): shaft and supply lines,
    broadband noise shaped in the FFT domain, amplitude modulation, knocks, the count capped at
    :attr:`SignalSettings.knock_max`);
 4. the fault level (:func:`fault_level`): the record is ``gain a + background``, ``gain`` the
@@ -247,7 +247,7 @@ class _Uniforms:
 def draw_background(key, fs, ranges=None) -> Background:
     """A :class:`~bearingsim.signals.background.Background` of JAX arrays drawn from ``ranges`` (default
     :data:`~bearingsim.signals.background.BACKGROUND_DEFAULTS`), with the distributions of
-    :func:`bearingsim.signals.background.random_background`: levels log-uniform relative to the
+    ``random_background`` of the NumPy oracle (tests/oracles/background_numpy.py): levels log-uniform relative to the
     broadband RMS, 50 or 60 Hz supply with equal odds, a PSD table of a tilt plus 1-4
     log-Gaussian bumps (unused bump slots masked), modulation depths strong (uniform in
     ``modulation_depth``) with probability ``modulation_strong`` else uniform 0-0.03."""
@@ -335,7 +335,7 @@ def background_draws(key, bg: Background, n, fs, knock_max) -> BackgroundDraws:
 
 
 def shape_noise(x, fs, rms, frequencies, levels_db):
-    """:func:`bearingsim.signals.background.shaped_noise` of the normals ``x``: the spectrum shaped by the
+    """``shaped_noise`` of the NumPy oracle (tests/oracles/background_numpy.py) of the normals ``x``: the spectrum shaped by the
     PSD table (dB linear over log f, flat outside; the mean removed) in the FFT domain, then
     scaled to ``rms``.  An empty table: white."""
     n = x.shape[-1]
@@ -395,7 +395,7 @@ def _knocks(n, fs, times, amplitudes, f, zeta):
 
 def synthesize_background(bg: Background, draws: BackgroundDraws, fs, shaft_hz):
     """The record of ``bg`` from its random numbers ``draws`` (the synthesis of
-    :func:`bearingsim.signals.background.background_signal`): lines at k f_r and l x the supply
+    ``background_signal`` of the NumPy oracle (tests/oracles/background_numpy.py)): lines at k f_r and l x the supply
     frequency (below fs/2), the shaped broadband noise times ``max(1 + sum m_k cos(.), 0)``,
     and each knock ``s A exp(-zeta w t) sin(w_d t)`` for 20 time constants."""
     fs = float(fs)
@@ -431,7 +431,7 @@ def _mean_interval(tp):
 
 
 def pass_factors(key, n, cv):
-    """:func:`bearingsim.signals.passes.pass_factors` from a key: ``exp(s xi - s^2)``, ``s^2 = ln(1 + cv^2)``."""
+    """``pass_factors`` of the NumPy oracle (tests/oracles/passes_numpy.py) from a key: ``exp(s xi - s^2)``, ``s^2 = ln(1 + cv^2)``."""
     s2 = jnp.log1p(cv * cv)
     return jnp.exp(jnp.sqrt(s2) * jax.random.normal(key, (n,), jnp.float64) - s2)
 
@@ -444,7 +444,7 @@ def pass_shifts(key, pass_times, jitter):
 
 
 def strike_factors(key, n, probability):
-    """:func:`bearingsim.signals.passes.strike_mask` from a key: 1 where a pass strikes (probability
+    """``strike_mask`` of the NumPy oracle (tests/oracles/passes_numpy.py) from a key: 1 where a pass strikes (probability
     ``probability``), else 0."""
     return (jax.random.uniform(key, (n,)) < probability).astype(jnp.float64)
 
@@ -474,7 +474,7 @@ def _delay(y, d):
 
 
 def vary_passes(x, fs, pass_times, factors, shifts, lead=0.15, taper=0.1):
-    """:func:`bearingsim.signals.passes.vary_passes` in JAX: ``pass_times`` (P,) padded with +inf (their
+    """``vary_passes`` of the NumPy oracle (tests/oracles/passes_numpy.py) in JAX: ``pass_times`` (P,) padded with +inf (their
     windows vanish), ``factors`` and ``shifts`` (P + 1,) (index 0: before the first pass)."""
     x = jnp.asarray(x, jnp.float64)
     n = x.shape[0]
@@ -526,6 +526,7 @@ def fault_level(a, background, gain, snr_dB, use_snr):
 # --- one item, all items --------------------------------------------------------------------
 
 
+@jit
 def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_probability, s: SignalSettings):
     """One record's pass-to-pass variability (the first step of :func:`finish_item`; a single
     simulation, :func:`bearingsim.dynamics.simulate`, applies the same): the housing acceleration
@@ -535,7 +536,8 @@ def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_
     ``strike`` streams) and put through the sensor ``modes`` (M, 3) (f Hz, zeta, gain) again;
     a record whose pit is bridged and always strikes keeps ``sensor``.  ``pass_times`` (P,) s,
     sorted, +inf padded.  Returns (sensor record, factors (P + 1,), shifts (P + 1,) s, c.v.,
-    delay fraction)."""
+    delay fraction).  One compiled program per settings and shapes (pass arrays, not Python
+    floats, for ``unbridged`` and ``strike_probability``)."""
     fs = s.fs
     P = pass_times.shape[0]
     cv = s.pass_cv_max * unbridged

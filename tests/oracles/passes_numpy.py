@@ -1,19 +1,12 @@
-"""Pass-to-pass variability of a defect's impacts (docs/realism.md): per-pass factors and
-delays applied to the part of a record that belongs to each defect pass.
-
-Successive impacts of one record differ; the rig's 0.021 in records show it clearly (kurtosis 21
-against 7.6, impact intervals 5.5 % apart against 0.9 %).  :func:`vary_passes` scales and delays
-the housing acceleration of each pass (factors log-normal with mean square 1 and coefficient of
-variation ``cv``; Gaussian delays of ``jitter`` x the pass interval) before the sensor path; in
-the small-depth regime the response is proportional to the depth, so this is a per-pass
-effective depth and exit time.  A factor of 0 removes a pass's impact (a ball pit that does not
-meet the raceway on that pass, :func:`strike_mask`).  Core: NumPy only.
-"""
+"""The NumPy pass-to-pass variability (the package's former host twin of
+:func:`bearingsim.signals.signal_stage.pass_variability`): per-pass factors and delays from NumPy
+generators seeded by an integer, the raised-cosine windows, the strike mask.  An independent
+oracle for the tests only (the package draws from keys, in JAX)."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from bearingsim.errors import InputError
 
 __all__ = ["pass_factors", "pass_variation", "vary_passes", "strike_mask"]
 
