@@ -19,6 +19,15 @@ records:
 The real records are the six 0 hp drive-end 12 kHz CWRU records of ``../shared/realdata``
 (:data:`REAL_RECORDS`); any other list of (file stem, class) can be given.  They are read, never
 written or copied.
+
+Issue 33 adds a second development rig and a second feature set: :data:`RIGS` (``cwru``: the 26
+records of :data:`DEV_RECORDS`; ``hit``: the 21 HIT-SM SpectraQuest MFS records of
+:data:`HIT_RECORDS`, decimated to 12.8 kHz), each with the simulated training spec a user of the
+rig would derive from the shipped four-class spec (:func:`rig_spec`: sample rate, speed range,
+item duration; the randomisation unchanged), and :data:`FEATURE_SETS` (``own`` =
+:func:`~bearingsim.signals.features.window_features`, ``plain`` =
+:func:`~bearingsim.signals.plain_features.plain_features`).  benchmarks/bench_transfer.py runs
+rig x feature set x classifier x window length.
 """
 from __future__ import annotations
 
@@ -27,16 +36,26 @@ from pathlib import Path
 
 import numpy as np
 
-from ..physics.defect import LOCATIONS
+from ..names import CLASSES
 from ..errors import InputError
 from ..signals.features import FEATURE_NAMES, FaultOrders, cut_windows, window_features
+from ..signals.plain_features import PLAIN_FEATURE_NAMES, plain_features
 
 __all__ = ["CLASSES", "REAL_RECORDS", "DEV_RECORDS", "DEV_GRADES", "CLASSIFIERS", "dev_records", "diagnosable",
            "DevFigures", "dev_figures", "dev_text", "composed_dataset", "TransferReport", "real_windows", "simulated_windows",
-           "make_classifier", "evaluate", "transfer_benchmark", "transfer_text", "require_sklearn"]
+           "make_classifier", "evaluate", "transfer_benchmark", "transfer_text", "require_sklearn",
+           "FEATURE_SETS", "HIT_RECORDS", "hit_records", "Rig", "RIGS", "rig_spec", "rig_data_dir"]
 
-#: class names (index = fault_class of the data sets)
-CLASSES = ("healthy",) + LOCATIONS
+#: the two feature sets of the benchmark (issue 33): name -> (function (windows, fs, shaft_hz,
+#: orders) -> (N, F), feature names); "own" the project's scale-free extractor, "plain" the
+#: textbook envelope lines in three fixed bands with kurtosis, crest factor and skewness
+FEATURE_SETS = {"own": (window_features, FEATURE_NAMES), "plain": (plain_features, PLAIN_FEATURE_NAMES)}
+
+
+def _feature_set(name):
+    if name not in FEATURE_SETS:
+        raise InputError(f"unknown feature set {name!r}: one of {', '.join(FEATURE_SETS)}")
+    return FEATURE_SETS[name]
 
 #: the six 0 hp 12 kHz drive-end records of ../shared/realdata: file stem -> class
 REAL_RECORDS = {
@@ -92,6 +111,77 @@ def diagnosable(grade: str) -> bool:
     return grade == "-" or grade.startswith("Y")
 
 
+#: the second development rig (issue 33): the 21 HIT-SM SpectraQuest MFS records of
+#: ``../shared/realdata/hit_mfs`` (README there: 6205 deep-groove bearings, the faulty one at the
+#: non-drive end; 51.2 kHz, 5.12 s; raceway faults of 2 / 5 / 8 deg of arc; no ball faults).
+#: file stem -> (class, fault arc in deg, nominal rpm), read from each npz's ``fault``,
+#: ``fault_arc_deg`` and ``rpm`` (``fault = "normal"`` is the class healthy).  No grades: every
+#: record counts.  The three normal records are ~150x weaker than the fault records: only
+#: level-free features may read them (both feature sets are).
+HIT_RECORDS = {
+    **{f"hit_mfs_normal_{n}rpm": ("healthy", 0.0, float(n)) for n in (600, 900, 1200)},
+    **{f"hit_mfs_inner{a}_{n}rpm": ("inner", float(a), float(n)) for a in (2, 5, 8) for n in (600, 900, 1200)},
+    **{f"hit_mfs_outer{a}_{n}rpm": ("outer", float(a), float(n)) for a in (2, 5, 8) for n in (600, 900, 1200)},
+}
+
+
+def hit_records() -> dict:
+    """{file stem: class} of :data:`HIT_RECORDS`."""
+    return {k: v[0] for k, v in HIT_RECORDS.items()}
+
+
+@dataclass(frozen=True)
+class Rig:
+    """A development rig of the transfer benchmark: its real records and what a user of the rig
+    knows for the simulated training spec (geometry: the spec's own 6205; speed range; the
+    sample rate the records are analysed at).
+
+    ``records``: {file stem: class}; ``grades``: {file stem: grade} ("-" counts as diagnosable);
+    ``subdir``: the records' folder under the real-data folder; ``sample_rate_Hz``: the rate the
+    simulated items are made at and the real records are resampled to (None: the records' own);
+    ``speed_rpm``: the data set's speed range (None: the spec's own)."""
+
+    name: str
+    records: dict
+    grades: dict
+    subdir: str
+    sample_rate_Hz: float
+    speed_rpm: tuple = None
+
+
+#: the two development rigs (issue 33).  CWRU: the 26 12 kHz drive-end records (DEV_RECORDS),
+#: simulated at 12 kHz over the spec's own speed range (1720-1800 rpm).  HIT: the 21 MFS records,
+#: decimated by 4 to 12.8 kHz (an integer factor, anti-aliased by scipy's polyphase filter) and
+#: simulated at 12.8 kHz over 600-1200 rpm: the simulated sensor modes lie in 1.5-5.5 kHz (the
+#: spec's randomisation, unchanged), so items at 51.2 kHz would cost 4x the samples and teach
+#: nothing above 6.4 kHz; and the same analysis band (both feature sets stop below 0.45 x 12 kHz
+#: or 0.45 fs) serves both rigs.
+RIGS = {
+    "cwru": Rig("cwru", dev_records(), DEV_GRADES, ".", 12000.0, None),
+    "hit": Rig("hit", hit_records(), {k: "-" for k in HIT_RECORDS}, "hit_mfs", 12800.0, (600.0, 1200.0)),
+}
+
+
+def rig_spec(spec, rig: Rig, duration_s, count, seed=0):
+    """The simulated training spec of ``rig``, derived from ``spec`` (the shipped four-class spec):
+    the rig's sample rate and speed range, ``count`` items of ``duration_s``, data set seed
+    ``seed``; everything else (geometry, classes, every randomised range) unchanged."""
+    s = spec.with_value("dynamics.sample_rate_Hz", rig.sample_rate_Hz)
+    if rig.speed_rpm is not None:
+        lo, hi = (float(v) for v in rig.speed_rpm)
+        s = s.with_value("operation.speed_rpm", 0.5 * (lo + hi)).with_value("dataset.speed_rpm", [lo, hi])
+    return (s.with_value("dataset.duration_s", float(duration_s)).with_value("dataset.count", int(count))
+            .with_value("dataset.seed", int(seed)))
+
+
+def rig_data_dir(realdata, rig: Rig):
+    """The folder of ``rig``'s records under the real-data folder ``realdata`` (None when absent)."""
+    if realdata is None:
+        return None
+    p = Path(realdata) / rig.subdir
+    return p if p.is_dir() and all((p / f"{k}.npz").exists() for k in rig.records) else None
+
+
 #: the two classifiers of the benchmark (fixed before any result; never tuned on real records)
 CLASSIFIERS = ("random_forest", "logistic_regression")
 
@@ -126,12 +216,21 @@ class Windows:
     label: np.ndarray           # (N,) class index
     group: np.ndarray           # (N,) record name or item index
     shaft_hz: np.ndarray        # (N,)
+    feature_names: tuple = FEATURE_NAMES
 
 
-def real_windows(data_dir, orders: FaultOrders, window_s=0.2, records=None, channel="DE", max_windows=None) -> Windows:
+def real_windows(data_dir, orders: FaultOrders, window_s=0.2, records=None, channel="DE", max_windows=None,
+                 features="own", sample_rate_Hz=None) -> Windows:
     """Windows of the real records (``records``: {file stem: class name}, default
     :data:`REAL_RECORDS`) of ``data_dir``; shaft speed from each record's rpm; at most
-    ``max_windows`` (the first ones) per record when given."""
+    ``max_windows`` (the first ones) per record when given; ``features`` a name of
+    :data:`FEATURE_SETS`; ``sample_rate_Hz``: resample every record to it first (polyphase,
+    anti-aliased; default: each record's own rate)."""
+    from fractions import Fraction
+
+    import scipy.signal as ss
+
+    fn, names = _feature_set(features)
     data_dir = Path(data_dir)
     records = REAL_RECORDS if records is None else records
     F, y, g, sh = [], [], [], []
@@ -143,19 +242,25 @@ def real_windows(data_dir, orders: FaultOrders, window_s=0.2, records=None, chan
             x = np.asarray(z[channel], float).ravel()
             fs = float(z["fs"])
             fr = float(z["rpm"]) / 60.0
+        if sample_rate_Hz is not None and float(sample_rate_Hz) != fs:
+            q = Fraction(float(sample_rate_Hz) / fs).limit_denominator(1000)
+            x = ss.resample_poly(x, q.numerator, q.denominator)
+            fs = fs * q.numerator / q.denominator
         W = cut_windows(x, fs, window_s)[:max_windows]
-        F.append(window_features(W, fs, fr, orders))
+        F.append(fn(W, fs, fr, orders))
         y += [CLASSES.index(cls)] * len(W)
         g += [stem] * len(W)
         sh += [fr] * len(W)
-    return Windows(np.concatenate(F), np.asarray(y), np.asarray(g), np.asarray(sh))
+    return Windows(np.concatenate(F), np.asarray(y), np.asarray(g), np.asarray(sh), names)
 
 
-def simulated_windows(path, orders: FaultOrders, window_s=None) -> Windows:
+def simulated_windows(path, orders: FaultOrders, window_s=None, features="own") -> Windows:
     """Windows of a data set file (``bearingsim dataset``): every item with result 0 cut into
-    ``window_s`` windows (default: the whole item), grouped by item index."""
+    ``window_s`` windows (default: the whole item), grouped by item index; ``features`` a name
+    of :data:`FEATURE_SETS`."""
     import h5py
 
+    fn, names = _feature_set(features)
     with h5py.File(path, "r") as f:
         X = np.asarray(f["signals"], float)
         lab = np.asarray(f["labels"])
@@ -167,8 +272,9 @@ def simulated_windows(path, orders: FaultOrders, window_s=None) -> Windows:
     W = X[:, :n * T].reshape(-1, T)
     rep = lambda a: np.repeat(a, n)
     fr = rep(lab["shaft_Hz"])
-    return Windows(window_features(W, fs, fr, orders), rep(lab["fault_class"]).astype(int),
-                   rep(lab["index"]), fr)
+    if n < 1:
+        raise InputError(f"items of {X.shape[1] / fs:g} s hold no window of {window_s:g} s")
+    return Windows(fn(W, fs, fr, orders), rep(lab["fault_class"]).astype(int), rep(lab["index"]), fr, names)
 
 
 @dataclass
@@ -212,7 +318,7 @@ def evaluate(model, name, train: Windows, test: Windows) -> TransferReport:
     imp = {}
     est = model[-1] if hasattr(model, "steps") else model
     if hasattr(est, "feature_importances_"):
-        imp = dict(sorted(zip(FEATURE_NAMES, map(float, est.feature_importances_)), key=lambda kv: -kv[1]))
+        imp = dict(sorted(zip(train.feature_names, map(float, est.feature_importances_)), key=lambda kv: -kv[1]))
     return TransferReport(name, cm, per, float(np.nanmean(recall)), recall, len(train.label), len(test.label), imp,
                           pred, np.asarray(test.label), np.asarray(test.group))
 
@@ -283,12 +389,14 @@ def dev_text(reports, grades=None) -> str:
 
 
 def transfer_benchmark(sim_path, data_dir, orders: FaultOrders, window_s=0.2, records=None,
-                       classifiers=CLASSIFIERS, max_windows=None) -> list:
+                       classifiers=CLASSIFIERS, max_windows=None, features="own", sample_rate_Hz=None) -> list:
     """Train each classifier on the windows of the data set file ``sim_path``, test on the real
-    records: a :class:`TransferReport` per classifier."""
+    records (resampled to ``sample_rate_Hz`` when given: the data set's rate); ``features`` a
+    name of :data:`FEATURE_SETS`: a :class:`TransferReport` per classifier."""
     require_sklearn()
-    train = simulated_windows(sim_path, orders, window_s)
-    test = real_windows(data_dir, orders, window_s, records, max_windows=max_windows)
+    train = simulated_windows(sim_path, orders, window_s, features)
+    test = real_windows(data_dir, orders, window_s, records, max_windows=max_windows, features=features,
+                        sample_rate_Hz=sample_rate_Hz)
     return [evaluate(make_classifier(c), c, train, test) for c in classifiers]
 
 
