@@ -48,7 +48,7 @@ HEAVY_FIRST = {
     "tests/test_shaft.py": 219, "tests/test_chunk_program.py": 208, "tests/test_dynamics.py": 184,
     "tests/test_identify.py": 153, "tests/test_defect.py": 115, "tests/test_fault_classes.py": 114,
     "tests/test_workflows.py": 112, "notebooks/02_spall_and_sweep.ipynb": 103,
-    "tests/test_sweep.py": 101, "tests/test_verdicts.py": 75, "tests/test_transfer.py": 69,
+    "tests/test_sweep.py": 101, "tests/test_verdicts.py": 75, "tests/test_transfer.py": 120, "tests/test_rotordynamics.py": 90,
     "tests/test_distributed.py": 67, "tests/test_cli.py": 65, "tests/test_packaging.py": 61,
     "notebooks/07_sim_to_real.ipynb": 55, "tests/test_jones.py": 55, "tests/test_chord.py": 52,
     "tests/test_dataset.py": 46, "notebooks/01_quasi_static.ipynb": 44,
