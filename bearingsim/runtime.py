@@ -35,6 +35,8 @@ import os
 import sys
 from pathlib import Path
 
+from ._version import __version__
+
 __all__ = ["OFF_VALUES", "PROGRAMS_FOLDER", "cache_dir", "configure", "configured_cache_dir", "cold", "mark_warm", "cache_size",
            "clear_cache"]
 
@@ -104,8 +106,6 @@ def _marker(key: str) -> Path | None:
     d = configured_cache_dir()
     if d is None:
         return None
-    from ._version import __version__
-
     h = hashlib.sha1(f"{__version__}|{sys.version_info[:2]}|{key}".encode()).hexdigest()[:16]
     return d / "bearingsim-warm" / h
 

@@ -7,7 +7,7 @@ import jax
 import numpy as np
 import pytest
 
-import bearingsim
+import bearingsim.physics.jones
 import bearingsim.physics.sweep
 from bearingsim.app import workflows
 from bearingsim.case import parse_case
@@ -44,7 +44,7 @@ class Recorder:
 
 def test_solve_case_passes_everything_the_case_says(monkeypatch):
     case = parse_case(BASE, "c.toml")
-    rec = Recorder(monkeypatch, bearingsim, "solve")
+    rec = Recorder(monkeypatch, bearingsim.physics.jones, "solve")
     assert workflows.solve_case(case) is rec.stub
     (b, op, loads, *rest), kw = rec.calls[0]
     assert not rest and kw["cage_angle"] == pytest.approx(np.radians(4.0))
@@ -68,12 +68,12 @@ def test_failed_states_raise_or_are_flagged(monkeypatch):
     with pytest.raises(NotConvergedError, match=r"c.toml: the cage-angle sweep failed \(item 60; 1 of 61"):
         workflows.sweep_case(case)
     assert workflows.sweep_case(case, throw=False) is rec.stub
-    rec = Recorder(monkeypatch, bearingsim, "solve", result=1)
+    rec = Recorder(monkeypatch, bearingsim.physics.jones, "solve", result=1)
     with pytest.raises(NotConvergedError, match=r"c.toml: the quasi-static solve failed: .*residual 12.5 N") as e:
         workflows.solve_case(case)
     assert e.value.hint and e.value.exit_code == 3
     assert workflows.solve_case(case, throw=False) is rec.stub
-    rec = Recorder(monkeypatch, bearingsim, "solve", result=4)        # an invalid state, not converged
+    rec = Recorder(monkeypatch, bearingsim.physics.jones, "solve", result=4)        # an invalid state, not converged
     with pytest.raises(InvalidStateError, match="c.toml: the quasi-static solve failed"):
         workflows.solve_case(case)
 

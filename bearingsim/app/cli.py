@@ -19,20 +19,51 @@ import time
 import warnings
 from pathlib import Path
 
+from .. import runtime
 from ..datasets import budget
 from ..names import LOCATIONS
-from ..errors import BearingsimError, OutputError
+from ..errors import BearingsimError, InputError, OutputError
 
 
+# ------------------------------------------------------------------------------ the start-up seam
+# `bearingsim --help` and an argument error load no JAX (tests/test_runtime.py), nor NumPy: each
+# module below loads NumPy and most of them JAX, matplotlib or Dask, so each is imported at its
+# first use, by the one import statement of its loader (visible to tests/test_architecture.py).
+# These loaders are the command line's only function-local imports of bearingsim modules; the
+# commands use the module objects.
 class _Lazy:
-    """A module imported at its first use: ``bearingsim --help`` does not load JAX (the import
-    statements stay visible to tests/test_architecture.py)."""
+    """A module imported at its first use."""
 
     def __init__(self, load):
         self._load = load
 
     def __getattr__(self, attr):
         return getattr(self._load(), attr)
+
+
+def _numpy():
+    import numpy as m
+    return m
+
+
+def _case():
+    from .. import case as m
+    return m
+
+
+def _units():
+    from ..case import units as m
+    return m
+
+
+def _jones():
+    from ..physics import jones as m
+    return m
+
+
+def _envelope():
+    from ..signals import envelope as m
+    return m
 
 
 def _io():
@@ -45,13 +76,38 @@ def _report():
     return m
 
 
-def _workflows():
-    from . import workflows as m
+def _plots():
+    from ..output import plots as m
     return m
 
 
-def _numpy():
-    import numpy as m
+def _plots_signal():
+    from ..output import plots_signal as m
+    return m
+
+
+def _dataset_spec():
+    from ..datasets import spec as m
+    return m
+
+
+def _distributed():
+    from ..datasets import distributed as m
+    return m
+
+
+def _record_spectra():
+    from ..realism import record_spectrum as m
+    return m
+
+
+def _identify():
+    from ..realism import identify as m
+    return m
+
+
+def _workflows():
+    from . import workflows as m
     return m
 
 
@@ -65,18 +121,19 @@ def _rotordynamics():
     return m
 
 
-np, io, report, workflows = _Lazy(_numpy), _Lazy(_io), _Lazy(_report), _Lazy(_workflows)
+np, cases, units, jones, envelope = _Lazy(_numpy), _Lazy(_case), _Lazy(_units), _Lazy(_jones), _Lazy(_envelope)
+io, report, plots, plots_signal = _Lazy(_io), _Lazy(_report), _Lazy(_plots), _Lazy(_plots_signal)
+dataset_spec, distributed = _Lazy(_dataset_spec), _Lazy(_distributed)
+record_spectra, ident, workflows = _Lazy(_record_spectra), _Lazy(_identify), _Lazy(_workflows)
 rotordynamics, rotor = _Lazy(_rotordynamics), _Lazy(_rotor)
 
 
 def load_case(*args, **kwargs):
-    from ..case import load_case as f
-    return f(*args, **kwargs)
+    return cases.load_case(*args, **kwargs)
 
 
 def from_si(*args, **kwargs):
-    from ..case.units import from_si as f
-    return f(*args, **kwargs)
+    return units.from_si(*args, **kwargs)
 
 
 def _wrote(*paths):
@@ -85,13 +142,11 @@ def _wrote(*paths):
 
 
 def _warn_failures(result, what):
-    from ..physics.jones import RESULTS
-
     codes = np.asarray(result)
     bad = int(np.sum(codes != 0))
     if bad:
         kinds, counts = np.unique(codes[codes != 0], return_counts=True)
-        why = "; ".join(f"{n}: {RESULTS.of(c).message} (result {int(c)})" for c, n in zip(kinds, counts))
+        why = "; ".join(f"{n}: {jones.RESULTS.of(c).message} (result {int(c)})" for c, n in zip(kinds, counts))
         print(f"bearingsim: warning: {bad} of {codes.size} {what} failed ({why}); they are "
               "flagged in 'converged' (values set to 0)", file=sys.stderr)
 
@@ -138,10 +193,8 @@ def _sweep(case, output, plot_dir):
           f"max Q_o {Qo.max():.1f} N, min Q_o {Qo.min():.1f} N")
     _wrote(output)
     if plot_dir:
-        from ..output.plots import plot_sweep
-
         p = _plot_dir(plot_dir) / "sweep.png"
-        plot_sweep(sol, title=case.title, spall=case.spall(), path=p)
+        plots.plot_sweep(sol, title=case.title, spall=case.spall(), path=p)
         _wrote(p)
 
 
@@ -174,11 +227,9 @@ def _simulate(case, output, plot_dir):
     print("  ".join(f"{k[:-3]} {v:.4f} Hz" for k, v in res.frequencies.items()))
     _wrote(output)
     if plot_dir:
-        from ..output.plots import plot_simulation
-
         spectrum = workflows.simulation_spectrum(res, case) if np.size(res.time) > 64 else None
-        _wrote(*plot_simulation(res, plot_dir, title=case.title, bearing=case.bearing(), spall=case.spall(),
-                                spectrum=spectrum))
+        _wrote(*plots.plot_simulation(res, plot_dir, title=case.title, bearing=case.bearing(), spall=case.spall(),
+                                      spectrum=spectrum))
 
 
 def cmd_simulate(args):
@@ -196,33 +247,28 @@ def _spectrum(path, plot_path):
     if plot_path:
         import matplotlib.pyplot as plt
 
-        from ..output.plots_signal import plot_envelope_spectrum
-        from ..signals.envelope import defect_markers
-
         Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
-        marks = defect_markers(analysis.markers, harmonics_of=(analysis.fault,))
-        plt.close(plot_envelope_spectrum(analysis.spectrum, marks, title=f"{path}: squared-envelope spectrum",
-                                         fmax=5.5 * analysis.fault_hz, path=plot_path))
+        marks = envelope.defect_markers(analysis.markers, harmonics_of=(analysis.fault,))
+        plt.close(plots_signal.plot_envelope_spectrum(analysis.spectrum, marks,
+                                                      title=f"{path}: squared-envelope spectrum",
+                                                      fmax=5.5 * analysis.fault_hz, path=plot_path))
         _wrote(plot_path)
 
 
 def _record_spectrum(args):
     """``bearingsim spectrum RECORD``: a real record's spectra with the case's fault lines."""
-    from ..realism.record_spectrum import record_spectrum
-
     case = load_case(args.case or "cwru_6205")
     if args.case is None:
         print("bearing: cwru_6205 (the CWRU drive-end 6205; give --case for another)")
-    rs = record_spectrum(args.input, case, rpm=args.rpm, channel=args.channel, sample_rate=args.sample_rate_Hz,
-                         unit=args.unit, overlay=args.overlay, item=args.item)
+    rs = record_spectra.record_spectrum(args.input, case, rpm=args.rpm, channel=args.channel,
+                                        sample_rate=args.sample_rate_Hz, unit=args.unit, overlay=args.overlay,
+                                        item=args.item)
     print(report.record_spectrum_text(rs))
     if args.plot:
         import matplotlib.pyplot as plt
 
-        from ..output.plots_signal import plot_record_spectrum
-
         Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
-        plt.close(plot_record_spectrum(rs, path=args.plot))
+        plt.close(plots_signal.plot_record_spectrum(rs, path=args.plot))
         _wrote(args.plot)
 
 
@@ -232,8 +278,6 @@ _RECORD_FLAGS = (("case", "--case"), ("rpm", "--rpm"), ("channel", "--channel"),
 
 
 def cmd_spectrum(args):
-    from ..errors import InputError
-
     budget.check_output(args.plot, "--plot")        # before any work (exit 4)
     if Path(args.input).suffix.lower() in (".h5", ".hdf5"):
         given = [flag for attr, flag in _RECORD_FLAGS if getattr(args, attr, None) is not None]
@@ -249,9 +293,7 @@ def cmd_spectrum(args):
 def cmd_cache(args):
     """``bearingsim cache [--clear]``: where the compiled and traced programs and the identify
     banks are kept, how much, clearing."""
-    from .. import runtime
-    from ..realism.identify import cache_dir as bank_dir
-
+    bank_dir = ident.cache_dir
     d = runtime.configured_cache_dir()
     banks = sorted(bank_dir().glob("identify_bank_*"))
     asked = runtime.cache_dir()
@@ -323,8 +365,6 @@ _DATASET_FLAGS = (("count", "--count", "dataset.count"), ("seed", "--seed", "dat
 def _dataset_overrides(case, args):
     """The spec with ``--count``, ``--seed``, ``--duration-s`` set (validated as the keys are;
     a refused value names its flag)."""
-    from ..errors import InputError
-
     if "dataset" not in case.data:
         return case
     for attr, flag, key in _DATASET_FLAGS:
@@ -339,8 +379,6 @@ def _dataset_overrides(case, args):
 
 
 def cmd_dataset(args):
-    from ..datasets import DatasetResult
-
     case = _dataset_overrides(load_case(args.spec), args)
     est = budget.check_case(case, "dataset", args.output)
     if est is not None:
@@ -350,14 +388,12 @@ def cmd_dataset(args):
     if args.workers is None and args.scheduler is None:      # in this process; Dask not imported
         s = workflows.dataset_case(case, args.output, **kw)
     else:
-        from ..datasets.distributed import DaskRunner
-
-        with DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
+        with distributed.DaskRunner(workers=args.workers, scheduler=args.scheduler) as runner:
             s = workflows.dataset_case(case, args.output, runner=runner, **kw)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
           f"({s.seconds_per_item:.3f} s per item, compilation included) on {s.device}, {s.chunk} items per chunk")
     if s.failed:
-        detail = ", ".join(f"{n} {DatasetResult(c).message}" for c, n in sorted(s.failures.items()))
+        detail = ", ".join(f"{n} {dataset_spec.DatasetResult(c).message}" for c, n in sorted(s.failures.items()))
         print(f"bearingsim: warning: {s.failed} of {s.count} items failed ({detail}); their "
               "signals are zero and labels/result != 0", file=sys.stderr)
     else:
@@ -379,8 +415,6 @@ def cmd_calibrate(args):
 
 
 def cmd_identify(args):
-    from ..realism import identify as ident
-
     case = load_case(args.case or "dataset_cwru_4class")
     if args.case is None:
         print("bearing: dataset_cwru_4class (the CWRU drive-end 6205; give --case for another)")
@@ -410,10 +444,8 @@ def cmd_compare(args):
     cmp = workflows.compare_case(case, throw=False)
     print(report.compare_text(case, cmp))
     if args.plot:
-        from ..output.plots import plot_compare
-
         p = _plot_dir(args.plot) / "compare.png"
-        plot_compare(cmp, title=case.title, path=p)
+        plots.plot_compare(cmp, title=case.title, path=p)
         _wrote(p)
     _compiled(case, "compare")
     return 0

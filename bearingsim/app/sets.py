@@ -14,7 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..case import lookup, unit_of
+from ..case.sets import set_layout
+from ..case.units import label as unit_label
 from ..errors import InputError
+from ..output.io import atomic_path, case_attrs, write_h5
+from ..physics.kinematics import Operation
+from ..physics.life import life_hours
+from ..physics.limits import contact_limits
+from ..physics.shaft import (PRELOAD_CLASSES, preload_class_force, raise_for_set, set_lives, solve_set,
+                             solve_set_batch, static_axial_capacity)
 
 __all__ = ["solve_set_case", "study_set_case", "SetStudy", "set_text", "set_info_text",
            "set_study_text", "set_to_dict", "write_set_study", "plot_set_static", "plot_set_study",
@@ -33,7 +42,6 @@ def _where(case):
 
 def solve_set_case(case, *, throw=True):
     """The set's state at the case's operating point (:class:`bearingsim.physics.shaft.SetSolution`)."""
-    from ..physics.shaft import raise_for_set, solve_set
     if not case.is_set:
         raise InputError(f"{case.source}: no [set] section: this is a single-bearing case")
     sol = solve_set(case.bearing_set(), case.operation(), case.loads(), cage_angle=case.cage_angle,
@@ -57,8 +65,6 @@ def study_set_case(case, *, throw=True) -> SetStudy:
     import jax
     import jax.numpy as jnp
 
-    from ..physics.kinematics import Operation
-    from ..physics.shaft import raise_for_set, solve_set_batch
     st = case.data.get("study")
     if st is None:
         raise InputError(f"{case.source}: no [study] section")
@@ -81,7 +87,6 @@ def study_set_case(case, *, throw=True) -> SetStudy:
         sol = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
     if throw:
         raise_for_set(sol, _where(case) + " (study)")
-    from ..case import unit_of
     return SetStudy(st["parameter"], unit_of(st["parameter"]), np.asarray(st["values"], float), sol)
 
 
@@ -100,7 +105,6 @@ def preload_class_text(case) -> str | None:
     cls = case.data.get("set", {}).get("preload_class")
     if cls is None:
         return None
-    from ..physics.shaft import PRELOAD_CLASSES, preload_class_force, static_axial_capacity
     b = case.bearing()
     C0a = float(static_axial_capacity(b))
     return (f"preload class {cls!r} = {100 * PRELOAD_CLASSES[cls]:g} % of C_0a = {C0a / 1e3:.1f} kN (static axial "
@@ -127,7 +131,6 @@ def _ratings(case):
     """C (N) of every bearing of the set ([bearing] / [set.second_bearing]
     dynamic_load_rating_kN), or None when a bearing has no rating."""
     s = case.data["set"]
-    from ..case.sets import set_layout
     facings, _, _, _, _, seconds = set_layout(s, 0.0)
     C1 = case.data["bearing"].get("dynamic_load_rating_kN")
     C2 = s.get("second_bearing", {}).get("dynamic_load_rating_kN")
@@ -140,8 +143,6 @@ def set_lives_hours(case, sol):
     C = _ratings(case)
     if C is None:
         return None
-    from ..physics.life import life_hours
-    from ..physics.shaft import set_lives
     L, Ls = set_lives(case.bearing_set(), sol, C)
     w = case.operation().speed
     return np.asarray(life_hours(L, w)), float(life_hours(Ls, w))
@@ -157,7 +158,6 @@ def set_text(case, sol) -> str:
              "set stiffness: " + ", ".join(f"{n} {K[i, i] * s:.2f} {u}" for n, i, u, s in K_DIAG), ""]
     margin = np.asarray(sol.lift_off_margin)
     ratio = np.asarray(sol.ball_load_ratio)
-    from ..physics.limits import contact_limits
     settings = case.limits_settings()
     pl, mu = settings["pressure_limit"], settings["friction_coefficient"]
     bset = case.bearing_set()
@@ -261,13 +261,11 @@ SET_FIELDS = {
 def parameter_label(parameter: str, unit: str | None = None) -> str:
     """A study parameter as a reader names it: "inner-ring speed n (rpm)" for
     ``operation.speed_rpm`` (the key's documented name and unit)."""
-    from ..case import lookup
-    from ..case.units import label
     key = lookup(parameter)
     name = key.doc.split(":")[0] if key is not None and key.doc else parameter
     u = unit or (key.unit if key is not None else "")
     try:
-        u = label(u) if u else ""
+        u = unit_label(u) if u else ""
     except KeyError:
         pass
     return f"{name} ({u})" if u else name
@@ -325,7 +323,6 @@ def write_set_study(path, case, study: SetStudy, table: dict | None = None):
     ``units`` and ``description``; a field with undefined entries (NaN: no rating, no loaded
     contact) is written with 0 there and a boolean ``NAME_defined`` beside it); attributes
     ``parameter`` and ``parameter_label``."""
-    from ..output.io import case_attrs, write_h5
     sol = study.solution
     table = set_study_table(case, study) if table is None else table
     ds = {"values": (np.asarray(study.values, float), study.unit or "1"),
@@ -352,7 +349,6 @@ def write_set_study_csv(path, case, study: SetStudy, table: dict | None = None):
     """The set study as CSV (atomically): one row per study value and bearing (``bearing`` 1..N),
     the columns of :data:`STUDY_FIELDS` then those of :data:`SET_FIELDS` (repeated on the rows of
     one value); a header line names each column's unit; undefined entries are empty."""
-    from ..output.io import atomic_path
     table = set_study_table(case, study) if table is None else table
     v = table["values"][0]
     M, N = table["axial_load_N"][0].shape
@@ -501,7 +497,6 @@ def study_limits(case, study: SetStudy) -> dict:
     the pressure limit, the largest friction coefficient raceway control needs over the available
     one, the smallest contact-ellipse margin to a groove edge (deg; negative: truncated), the
     lift-off margin (axial load / preload)."""
-    from ..physics.limits import contact_limits
     settings = case.limits_settings()
     bset = case.bearing_set()
     sol = study.solution
@@ -561,7 +556,6 @@ def plot_set_limits(case, study: SetStudy, title="", path=None):
 def _save(fig, path):
     if path is None:
         return fig
-    from ..output.io import atomic_path
     import matplotlib.pyplot as plt
     from pathlib import Path
     Path(path).parent.mkdir(parents=True, exist_ok=True)

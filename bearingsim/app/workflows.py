@@ -36,13 +36,24 @@ and :mod:`bearingsim.app.sets`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from ..case import check_sampling, unit_of
+from ..case import check_sampling, load_case, unit_of
 from ..case.units import from_si
 from ..errors import InputError, NotConvergedError
+from ..output import io
+from ..output.report import info_text as bearing_info, static_text, study_text
+from ..physics import jones, life
+from ..physics import sweep as sweeps
+from ..physics.kinematics import Operation
+from ..physics.limits import contact_limits
+from ..programs import jit
+from ..realism.records import read_record
+from ..signals.envelope import envelope_spectrum, fault_lines, harmonic_peaks, peak_frequency, select_band
+from . import sets
 
 __all__ = ["solve_case", "info_text", "static_command", "study_command", "assess_case", "Assessment", "sweep_case", "study_case", "simulate_case", "compare_case", "dataset_case",
            "spectrum_file", "calibrate_case", "envelope_band", "simulation_spectrum", "Study", "Comparison",
@@ -62,12 +73,10 @@ def _check(sol, case, what, throw):
     (single or batch) with a failed item, naming the case file, the reason and the count;
     ``throw="all"``: only when every item failed (a sweep with no valid state at all has the
     verdict of a single solve, e.g. a reverse axial load)."""
-    from ..physics.jones import raise_for
-
     if throw == "all":
         throw = bool(np.all(np.asarray(sol.result) != 0))
     if throw:
-        raise_for(sol, f"{case.source}: {what}", bearing=case.bearing())
+        jones.raise_for(sol, f"{case.source}: {what}", bearing=case.bearing())
     return sol
 
 
@@ -80,14 +89,10 @@ def solve_case(case, *, throw=True):
     result 8, or 7 at an angular contact bearing's low edge, healthy or with a defect; a set's
     bearings are checked by the same rule); nothing is decided here."""
     if case.is_set:
-        from .sets import solve_set_case
-
-        return solve_set_case(case, throw=throw)
-    import bearingsim as bs
-
+        return sets.solve_set_case(case, throw=throw)
     b, op, spall = case.bearing(), case.operation(), case.spall()
-    sol = bs.solve(b, op, case.loads(), cage_angle=case.cage_angle,
-                   spall=spall, hertz_method=case.hertz_method, throw=False)
+    sol = jones.solve(b, op, case.loads(), cage_angle=case.cage_angle,
+                      spall=spall, hertz_method=case.hertz_method, throw=False)
     return _check(sol, case, "the quasi-static solve", throw)
 
 
@@ -114,9 +119,6 @@ def _contact_limits_jit():
     some thirty small eager ones: a warm ``bearingsim static`` loads one program instead."""
     global _LIMITS_JIT
     if _LIMITS_JIT is None:
-        from ..physics.limits import contact_limits
-        from ..programs import jit
-
         _LIMITS_JIT = jit(contact_limits)
     return _LIMITS_JIT
 
@@ -128,8 +130,6 @@ def assess_case(case, sol) -> Assessment:
     """Per-contact limits (MODEL.md 11: pressure, the friction raceway control needs, the
     ellipse against the shoulders) and, when the case gives ``bearing.dynamic_load_rating_kN``,
     the ISO/TS 16281 rating life of the state ``sol`` of ``case`` (single state)."""
-    from ..physics import life
-
     b, op = case.bearing(), case.operation()
     st = case.limits_settings()
     lim = _contact_limits_jit()(sol, b, op.control, pressure_limit=st["pressure_limit"],
@@ -153,15 +153,13 @@ def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):
     rectangular-spall edge inserted unless ``resolve_edges=False``).  ``throw``: True raises for
     any failed angle, ``"all"`` (``bearingsim sweep``) only when every angle failed, False never
     (codes per angle)."""
-    from ..physics.sweep import sweep_angles, sweep_chunked
-
     b, spall = case.bearing(), case.spall()
     st = case.sweep_settings()
-    angles = sweep_angles(b, spall, st["start"], st["stop"], st["steps"], resolve_edges)
+    angles = sweeps.sweep_angles(b, spall, st["start"], st["stop"], st["steps"], resolve_edges)
     bar = _progress(len(angles), "sweep", "angle", progress)
     try:
-        sol = sweep_chunked(b, case.operation(), case.loads(), spall, angles, progress=bar.update,
-                            hertz_method=case.hertz_method)
+        sol = sweeps.sweep_chunked(b, case.operation(), case.loads(), spall, angles, progress=bar.update,
+                                   hertz_method=case.hertz_method)
     finally:
         bar.close()
     return _check(sol, case, "the cage-angle sweep", throw)
@@ -209,24 +207,21 @@ def _study_batch(cases, grids, bar):
     import jax
     import jax.numpy as jnp
 
-    from ..physics.jones import load_vector, solve_batch
-    from ..physics.kinematics import Operation
-
     c0 = cases[0]
     b, spall, control = c0.bearing(), c0.spall(), c0.operation().control
     M, N = len(cases), grids[0].size
     ops, lds = [c.si("operation") for c in cases], [c.si("load") for c in cases]
     per_state = lambda v: np.repeat(np.asarray(v, float), N, axis=0)  # noqa: E731
     speed, cf, gy = (per_state([o[k] for o in ops]) for k in ("speed", "centrifugal", "gyroscopic"))
-    loads = per_state(np.asarray(load_vector(**{k: np.array([d[k] for d in lds]) for k in lds[0]})).T)
+    loads = per_state(np.asarray(jones.load_vector(**{k: np.array([d[k] for d in lds]) for k in lds[0]})).T)
     angles = np.concatenate(grids)
     total = M * N
     chunk = min(1 << max(0, int(total - 1).bit_length()), STUDY_CHUNK)   # a power of two: few shapes
     parts = []
     for k in range(0, total, chunk):
         idx = np.minimum(np.arange(k, k + chunk), total - 1)      # pad the last chunk: one shape
-        sol = solve_batch(b, Operation(speed[idx], control, cf[idx], gy[idx]), loads[idx],
-                          cage_angle=angles[idx], spall=spall, hertz_method=c0.hertz_method)
+        sol = jones.solve_batch(b, Operation(speed[idx], control, cf[idx], gy[idx]), loads[idx],
+                                cage_angle=angles[idx], spall=spall, hertz_method=c0.hertz_method)
         n = min(chunk, total - k)
         parts.append(jax.tree_util.tree_map(lambda a: a[:n], sol))
         bar.update(n)
@@ -235,9 +230,7 @@ def _study_batch(cases, grids, bar):
 
 
 def _study_sweep(c, grid):
-    from ..physics.sweep import sweep
-
-    return sweep(c.bearing(), c.operation(), c.loads(), c.spall(), angles=grid, hertz_method=c.hertz_method)
+    return sweeps.sweep(c.bearing(), c.operation(), c.loads(), c.spall(), angles=grid, hertz_method=c.hertz_method)
 
 
 def _study_value(shared, m):
@@ -265,9 +258,7 @@ def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     (:func:`bearingsim.app.sets.study_set_case` -> ``SetStudy``; one batched solve, in this process:
     ``progress`` and ``runner`` do not apply)."""
     if case.is_set:
-        from .sets import study_set_case
-
-        return study_set_case(case, throw=throw)
+        return sets.study_set_case(case, throw=throw)
     import jax
 
     spec = case.study_settings()
@@ -325,8 +316,6 @@ def _replace_row(sol, m, row):
 # decides, so the command line (and a notebook that wants the command's outputs) has no set
 # branch.  ``say`` receives each line the command prints (the text, then "wrote PATH" per file).
 def _plot_dir(path):
-    from pathlib import Path
-
     d = Path(path)
     d.mkdir(parents=True, exist_ok=True)
     return d
@@ -335,13 +324,9 @@ def _plot_dir(path):
 def info_text(case) -> str:
     """The text of ``bearingsim info``: the case's inputs and derived quantities, and for a set its
     bearings (positions, facings, preloads)."""
-    from ..output.report import info_text as bearing_info
-
     text = bearing_info(case)
     if case.is_set:
-        from .sets import set_info_text
-
-        text += "\n" + set_info_text(case)
+        text += "\n" + sets.set_info_text(case)
     return text
 
 
@@ -350,14 +335,8 @@ def static_command(case, json_path=None, plot_path=None, *, say=print):
     its text said, its JSON record written to ``json_path`` and its polar plot to ``plot_path``
     (each None: not written).  Raises as :func:`solve_case` with ``throw=True``.  Returns the
     solution."""
-    from pathlib import Path
-
-    from ..output import io
-
     sol = solve_case(case)
     if case.is_set:
-        from . import sets
-
         say(sets.set_text(case, sol))
         if json_path:
             io.write_json(json_path, sets.set_to_dict(case, sol))
@@ -366,8 +345,6 @@ def static_command(case, json_path=None, plot_path=None, *, say=print):
             sets.plot_set_static(sol, title=case.title, path=plot_path)
             say(f"wrote {plot_path}")
         return sol
-    from ..output.report import static_text
-
     assessment = assess_case(case, sol)
     say(static_text(case, sol, assessment))
     if json_path:
@@ -375,7 +352,7 @@ def static_command(case, json_path=None, plot_path=None, *, say=print):
         say("")
         say(f"wrote {json_path}")
     if plot_path:
-        from ..output.plots import plot_static
+        from ..output.plots import plot_static  # local: matplotlib (~1 s) only when a figure is asked for
 
         Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
         plot_static(sol, title=case.title, spall=case.spall(), path=plot_path)
@@ -391,11 +368,7 @@ def study_command(case, output, plot_dir=None, *, workers=None, scheduler=None, 
     ``scheduler``: the single-bearing sweeps on a Dask cluster (a set's study is one batched solve
     in this process).  ``warn(codes, what)`` receives the result codes (failed states are
     returned flagged, not raised).  Returns the study."""
-    from pathlib import Path
-
     if case.is_set:
-        from . import sets
-
         study = study_case(case, throw=False)
         if warn:
             warn(study.solution.result, "study states")
@@ -415,13 +388,10 @@ def study_command(case, output, plot_dir=None, *, workers=None, scheduler=None, 
             sets.plot_set_limits(case, study, title=case.title, path=p)
             say(f"wrote {p}")
         return study
-    from ..output import io
-    from ..output.report import study_text
-
     if workers is None and scheduler is None:
         study = study_case(case, throw=False, progress=progress)
     else:
-        from ..datasets.distributed import DaskRunner
+        from ..datasets.distributed import DaskRunner  # local: Dask (optional, ~1 s) only with workers
 
         with DaskRunner(workers=workers, scheduler=scheduler) as runner:
             study = study_case(case, throw=False, progress=progress, runner=runner)
@@ -431,7 +401,7 @@ def study_command(case, output, plot_dir=None, *, workers=None, scheduler=None, 
     say(study_text(case, study))
     say(f"wrote {output}")
     if plot_dir:
-        from ..output.plots import plot_study
+        from ..output.plots import plot_study  # local: matplotlib (~1 s) only when a figure is asked for
 
         p = _plot_dir(plot_dir) / ("study_" + study.parameter.replace(".", "_") + ".png")
         plot_study(study.solution, study.values, study.parameter, study.unit, title=case.title,
@@ -445,6 +415,8 @@ def simulate_case(case, *, throw=True, progress=None, **kw):
     """The dynamic simulation of the case's ``[dynamics]`` (``bearingsim.dynamics.simulate_case``).
     Raises CaseError (an InputError) for a sample rate below twice the highest characteristic
     frequency of the case (:func:`bearingsim.case.check_sampling`)."""
+    # local: importing the dynamics (and the data set engine, below) costs ~0.5 s of JAX set-up,
+    # which only simulate, compare and dataset need: info, static, sweep and study start without it
     from .. import dynamics
 
     check_sampling(case)
@@ -475,8 +447,6 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     """Quasi-static sweep at the cage angles of the dynamic run (subsampled to ``max_angles``),
     an inner spall or a ball pit turned to where it is at each of those instants, with peak
     values side by side.  Needs a ``[dynamics]`` section in the case file."""
-    from ..physics.sweep import sweep
-
     if "dynamics" not in case.raw:
         raise InputError(f"{case.source}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
     res = simulate_case(case)
@@ -487,8 +457,8 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     if spall is not None and spall.location in ("inner", "ball"):
         rate = 1.0 if spall.location == "inner" else float(res.spin_ratio)
         centers = float(spall.center) + rate * np.asarray(res.shaft_angle)[idx]
-    qs = sweep(case.bearing(), case.operation(), case.loads(), spall, angles=th[idx], centers=centers,
-               hertz_method=case.hertz_method)
+    qs = sweeps.sweep(case.bearing(), case.operation(), case.loads(), spall, angles=th[idx], centers=centers,
+                      hertz_method=case.hertz_method)
     _check(qs, case, "the quasi-static sweep at the dynamic run's cage angles", throw)
 
     def ratio(d, s, tol):        # amplification only where the static value is not ~0
@@ -517,7 +487,7 @@ def dataset_case(case, path, *, throw=True, progress=False, runner=None, device=
     (same file); None runs them in this process.  ``device`` ("cpu", "gpu", None: JAX's
     default), ``chunk`` (items per chunk; 0: fill the device) and ``compression`` (of /signals)
     as in ``make_dataset``."""
-    from ..datasets import make_dataset
+    from ..datasets.runner import make_dataset  # local: the data set engine loads the dynamics (above)
 
     summary = make_dataset(case, path, progress=progress, runner=runner, device=device, chunk=chunk,
                            compression=compression)
@@ -537,9 +507,9 @@ def calibrate_case(healthy, output, *, template="dataset_cwru_4class", fault=Non
     ``sample_rate`` / ``unit`` where the file does not say; ``rpm`` the healthy record's exact
     shaft speed (else searched near the .npz rpm or the template's speed).  Returns the
     ``MachineCalibration``."""
-    from ..case import load_case
+    # local: the machine fits load SciPy (scipy.signal, ~1-2 s), which only `bearingsim calibrate`
+    # needs: every other command imports this module without it
     from ..realism.machine import calibrate_machine, write_spec
-    from ..realism.records import read_record
 
     tpl = load_case(template)
     x, fs, u, nominal, ch = read_record(healthy, channel, sample_rate, unit)
@@ -563,15 +533,11 @@ def calibrate_case(healthy, output, *, template="dataset_cwru_4class", fault=Non
 # ------------------------------------------------------------------------------- spectra
 def envelope_band(sample_rate, resonance_hz):
     """Demodulation band around the structural resonance (kept below 0.45 x the sample rate)."""
-    from ..signals.envelope import select_band
-
     return select_band(np.zeros(16), sample_rate, resonance_hz=min(resonance_hz, 0.45 * sample_rate))
 
 
 def simulation_spectrum(res, case):
     """Squared-envelope spectrum of a simulation's sensor signal, in the case's resonance band."""
-    from ..signals.envelope import envelope_spectrum
-
     d = case.dynamics_settings()
     return envelope_spectrum(np.asarray(res.sensor_acceleration), d["sample_rate"],
                              band=envelope_band(d["sample_rate"], d["resonance_frequency"]))
@@ -599,10 +565,7 @@ def spectrum_file(path, *, resonance_hz=3000.0) -> EnvelopeAnalysis:
     (BPFO for an outer-race spall or a healthy bearing, BPFI for an inner-race spall, 2 BSF for a
     ball pit: :func:`bearingsim.signals.envelope.fault_lines`) and its harmonics.  The band is centred on
     the stored case's resonance (else ``resonance_hz``)."""
-    from ..output.io import read_simulation
-    from ..signals.envelope import envelope_spectrum, fault_lines, harmonic_peaks, peak_frequency
-
-    sim = read_simulation(path)
+    sim = io.read_simulation(path)
     t, a, fr = sim["time"], sim["sensor_acceleration"], sim["frequencies"]
     fs = 1.0 / float(t[1] - t[0])
     location = None

@@ -44,11 +44,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..physics.defect import Spall
+from ..physics.geometry import Bearing, Material
+from ..physics.jones import load_vector
+from ..physics.kinematics import Operation
+from ..physics.shaft import BearingSet, preload_class_force
 from .files import case_path, parse_toml, read_case_text, shipped_cases, shipped_cases_dir
 from .messages import fmt_value, suggest
 from .reference import schema_reference_markdown
 from .sampling import characteristic_frequencies, check_sampling
 from .schema import OPTIONAL, REQUIRED, SCHEMA, Key, Section, all_keys, lookup, si_name, split_key, unit_of
+from .sets import set_layout
 from .toml_writer import to_toml
 from .units import UNITS, to_si
 from .validation import CaseError, section_raw, set_raw, validate
@@ -154,13 +160,11 @@ class Case:
         return out
 
     def _material(self, path: str):
-        from ..physics.geometry import Material
         m = self.si(path)
         return Material(m["youngs_modulus"], m["poisson_ratio"], m["density"])
 
     def bearing(self):
         """:class:`bearingsim.Bearing` in SI."""
-        from ..physics.geometry import Bearing
         b = self.si("bearing")
         rings = self._material("material")
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
@@ -198,7 +202,6 @@ class Case:
         return "set" in self.data
 
     def _bearing_from(self, path: str):
-        from ..physics.geometry import Bearing
         b = self.si(path)
         rings = self._material("material")
         balls = self._material("material.ball") if section_raw(self.data, "material.ball") else rings
@@ -215,8 +218,6 @@ class Case:
         """:class:`bearingsim.physics.shaft.BearingSet` of [set] (SI; preload classes resolved), or None."""
         if not self.is_set:
             return None
-        from ..physics.shaft import BearingSet, preload_class_force
-        from .sets import set_layout
         s = self.data["set"]
         first = self.bearing()
         second = self._bearing_from("set.second_bearing") if "second_bearing" in s else None
@@ -233,7 +234,6 @@ class Case:
 
     def operation(self):
         """:class:`bearingsim.Operation` (speed in rad/s via ``Operation.from_rpm``)."""
-        from ..physics.kinematics import Operation
         o = self.data["operation"]
         return Operation.from_rpm(o["speed_rpm"], o["raceway_control"], o["centrifugal"], o["gyroscopic"])
 
@@ -249,7 +249,6 @@ class Case:
 
     def loads(self):
         """Inner-ring loads [Fx, Fy, Fz, Mx, My] (N, N m) as a float64 jax array."""
-        from ..physics.jones import load_vector
         ld = self.si("load")
         return load_vector(axial=ld["axial"], radial_x=ld["radial_x"], radial_y=ld["radial_y"],
                            moment_x=ld["moment_x"], moment_y=ld["moment_y"])
@@ -258,7 +257,6 @@ class Case:
         """:class:`bearingsim.Spall` (rad, m), or None for a healthy bearing (no [defect]).  Its
         ``location`` is [defect] location; a ball pit's ``center`` is spin_angle_deg and its
         ``ball`` ball_index."""
-        from ..physics.defect import Spall
         if "defect" not in self.data:
             return None
         d = self.si("defect")

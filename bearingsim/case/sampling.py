@@ -3,6 +3,7 @@ frequency of the case (shaft, FTF, BPFO, BPFI, BSF, 2 BSF) cannot show the defec
 refused, naming the keys and the minimum rate."""
 from __future__ import annotations
 
+from ..physics.kinematics import defect_frequencies
 from .messages import fmt_num
 from .units import from_si, to_si
 from .validation import CaseError
@@ -15,8 +16,6 @@ _NAMES = {"ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf": "BSF", "two_bsf":
 def characteristic_frequencies(case, speed_rpm=None) -> dict:
     """Shaft and defect frequencies (Hz) of the case at ``speed_rpm`` (default: the case's
     ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
-    from ..physics.kinematics import defect_frequencies
-
     n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
     shaft = from_si(to_si(n, "rpm"), "rev_s")
     f = defect_frequencies(case.bearing(), shaft)

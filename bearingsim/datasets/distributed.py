@@ -78,9 +78,9 @@ class JaxWorkerSetup(_PluginBase):
             os.environ["JAX_COMPILATION_CACHE_DIR"] = self.cache_dir
             if self.min_compile_time_s is not None:
                 os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = str(self.min_compile_time_s)
+        # bearingsim is imported already (this module is part of it, unpickled on the worker):
+        # float64 on and the XLA options set before JAX loads here
         import jax
-
-        import bearingsim  # noqa: F401  (float64, XLA options)
 
         if self.cache_dir:
             Path(self.cache_dir).mkdir(parents=True, exist_ok=True)

@@ -194,11 +194,12 @@ class WindowDataset:
         return X, self.targets()
 
     def _all_features(self):
+        # local: reading a data set imports NumPy and h5py only; the features (and the case
+        # they need) load JAX, so only ``features=True`` imports them (the module docstring)
         from ..case import parse_case
-        from ..signals.features import fault_orders, window_features
+        from ..signals.features import FEATURE_NAMES, fault_orders, window_features
 
         if not len(self):
-            from ..signals.features import FEATURE_NAMES
             return np.zeros((0, len(FEATURE_NAMES)), np.float32)
         case = parse_case(self.metadata["case_toml"], self.metadata["path"])
         orders = fault_orders(case.bearing())

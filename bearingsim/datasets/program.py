@@ -28,7 +28,11 @@ import numpy as np
 from ..errors import InputError
 from .. import dynamics
 from ..case.units import from_si, to_si
-from .spec import DatasetResult, item_locations
+from ..physics.defect import LOCATIONS, Spall
+from ..physics.jones import load_vector
+from ..physics.kinematics import Operation
+from ..signals.signal_stage import ItemDraws, finish_items
+from .spec import DatasetResult, item_locations, slots_of
 
 __all__ = ["CHUNK_FIELDS", "BACKGROUND_FIELDS", "MICRO_BATCH", "DEFAULT_MICRO_BATCH", "Physics", "micro_batch", "program_threads",
            "chunk_keys", "plan_speed", "plan_program", "device_program", "simulate_chunk",
@@ -167,9 +171,6 @@ def plan_program(plan):
 
 def _host_inputs(plan, pad):
     """The per-item inputs of the padded items ``pad`` as host arrays (no per-item work)."""
-    from ..physics.defect import LOCATIONS
-    from ..signals.signal_stage import ItemDraws
-
     lab = plan.lab[pad]
     n = pad.size
     loads = np.zeros((n, 5))
@@ -202,8 +203,6 @@ def device_program(plan, pad, threads=None):
     already runs chunks side by side).  Returns a dict of (len(pad),) / (len(pad), T) host
     arrays: the signals and :data:`CHUNK_FIELDS`."""
     import jax
-
-    from ..signals.signal_stage import finish_items
 
     prog, (dev, params) = plan_program(plan)
     W = plan.width
@@ -283,11 +282,6 @@ def run_settings(physics, lab, extent, depth, center, fs) -> int:
     items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and least
     loaded, largest defect), the largest, fixed once so that no chunk recompiles.  (The Newton
     step count is chosen per micro-batch inside the chunk program.)"""
-    from ..physics.defect import Spall
-    from ..physics.jones import load_vector
-    from ..physics.kinematics import Operation
-    from .spec import slots_of
-
     ph = physics
     slots = slots_of(lab)
     loc = item_locations(lab)

@@ -30,11 +30,13 @@ import numpy as np
 
 from ..case import check_sampling
 from ..errors import BearingsimError, InputError, SettingWarning
+from ..signals.background import Background
+from ..signals.signal_stage import SignalSettings
 from .program import CHUNK_FIELDS, Physics, micro_batch, program_threads, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
-from .writer import (assemble, finished_chunks, open_partial, partial_path, read_chunk, spec_record, chunk_path,
-                     write_chunk)
+from .writer import (assemble, chunk_path, compression_options, finished_chunks, open_partial, partial_path,
+                     read_chunk, spec_record, write_chunk)
 
 __all__ = ["ChunkPlan", "Interrupted", "serial_imap", "threaded_imap", "make_dataset", "resolve_device", "default_chunk",
            "BYTES_PER_SAMPLE", "MAX_GPU_CHUNK", "DEVICES"]
@@ -191,11 +193,8 @@ class ChunkPlan:
 
 def signal_settings(case, ds, fs, T, physics):
     """The :class:`bearingsim.signals.signal_stage.SignalSettings` of the case's [dataset] (static)."""
-    from ..signals.signal_stage import SignalSettings
-
     machine = None
     if ds.get("background", "none") == "machine":
-        from ..signals.background import Background
         sec = case.si("background") if "background" in case.data else {}
         machine = Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
                              tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
@@ -223,7 +222,6 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     import jax
     from tqdm import tqdm
 
-    from .writer import compression_options
     compression_options(compression)                    # a bad name fails before any work
     imap = serial_imap if runner is None else runner.imap
     ds = settings(case)

@@ -21,7 +21,7 @@ from .. import dynamics
 from ..case.units import to_si
 from ..physics.defect import LOCATIONS
 from ..errors import InputError, ResultCode
-from ..keys import STREAMS
+from ..keys import STREAMS, item_keys as jax_item_keys
 from ..names import CLASSES
 from ..programs import jit
 
@@ -167,9 +167,8 @@ def _cpu():
 def item_keys(seed, n, start=0) -> np.ndarray:
     """(n, 2) uint32: the raw key data of items ``start .. start + n - 1``,
     ``jax.random.fold_in(jax.random.PRNGKey(seed), index)``."""
-    from .. import keys as keys_mod
     with _cpu():
-        return np.asarray(keys_mod.item_keys(seed, np.arange(start, start + n))).astype(np.uint32)
+        return np.asarray(jax_item_keys(seed, np.arange(start, start + n))).astype(np.uint32)
 
 
 def _u(k, lo, hi):

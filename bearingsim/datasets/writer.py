@@ -27,6 +27,7 @@ import numpy as np
 from .._version import __version__
 from ..case.units import from_si, to_si
 from ..errors import InputError
+from ..output import io
 from .spec import CLASSES, LABEL_FIELDS, result_messages
 
 __all__ = ["CHUNK_FORMAT", "COMPRESSIONS", "DEFAULT_COMPRESSION", "partial_path", "write_atomic", "chunk_path",
@@ -132,8 +133,6 @@ def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chun
     """Write the HDF5 file from the finished chunks, in item order (atomically); ``fields``: the
     label fields the chunks carry."""
     import h5py
-
-    from ..output import io
 
     opts = compression_options(compression)
     n = lab.size

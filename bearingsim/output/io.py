@@ -15,8 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
+from ..case import CaseError, parse_case
 from ..case.units import from_si
-from ..errors import BearingsimError, OutputError
+from ..errors import BearingsimError, InputError, OutputError
 
 
 class NonFiniteOutputError(OutputError):
@@ -292,9 +293,6 @@ def read_simulation(path) -> dict:
     {shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz}, case: the stored Case or None).  Raises
     :class:`~bearingsim.errors.InputError` for anything else."""
     import h5py
-
-    from ..case import CaseError, parse_case
-    from ..errors import InputError
 
     if Path(path).is_dir():
         raise InputError(f"{path}: is a directory, not a bearingsim simulate output")

@@ -5,6 +5,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..case.units import from_si
+from ..physics.defect import depth_profile
+from ..signals.envelope import defect_markers, fault_lines
+from .plots_signal import plot_envelope_spectrum, plot_time_history
 
 C_IN, C_OUT = "#1f77b4", "#d62728"
 
@@ -254,8 +257,6 @@ def _balls_over_spall(res, bearing, spall):
     if spall is not None and bearing is not None:
         import jax.numpy as jnp
 
-        from ..physics.defect import depth_profile
-
         Z = Qo.shape[1]
         psi = np.asarray(res.cage_angle)[:, None] + 2 * np.pi * np.arange(Z) / Z
         inside = np.asarray(depth_profile(bearing, spall, jnp.asarray(psi))) > 0
@@ -271,9 +272,6 @@ def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=No
     with the defect's line (BPFO, BPFI or 2 BSF), its sidebands and harmonics when ``spectrum``
     is given.  Returns the paths written."""
     from pathlib import Path
-
-    from .plots_signal import plot_envelope_spectrum, plot_time_history
-    from ..signals.envelope import defect_markers, fault_lines
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..case.units import from_si, label
+from ..physics.hertz import hertz_contact
+from ..physics.kinematics import ball_kinematics, defect_frequencies
 from .io import RING_DOFS
 
 __all__ = ["table", "quantity", "info_text", "static_text", "limits_text", "study_text", "compare_text", "spectrum_text"]
@@ -35,8 +37,6 @@ def _pairs(rows) -> list[str]:
 
 def info_text(case) -> str:
     """Geometry, Hertz constants at alpha_0, kinematics, defect frequencies and spall of a case."""
-    import bearingsim as bs
-
     b = case.bearing()
     op = case.operation()
     a0 = float(b.free_contact_angle)
@@ -58,13 +58,13 @@ def info_text(case) -> str:
     out += ["", f"Hertz point contact at alpha_0 ({case.hertz_method})"]
     rows = []
     for name, inner in (("inner", True), ("outer", False)):
-        c = bs.hertz_contact(b, a0, inner, case.hertz_method)
+        c = hertz_contact(b, a0, inner, case.hertz_method)
         rows.append((name, from_si(float(c.sum_rho), "per_mm"), float(c.F_rho), float(c.kappa), float(c.K_ell),
                      float(c.E_ell), from_si(float(c.K), "N_per_mm1_5")))
     out.append(table(("contact", "sum_rho (1/mm)", "F(rho)", "kappa", "K(e)", "E(e)", "K (N/mm^1.5)"), rows,
                      ("{}", "{:.5f}", "{:.5f}", "{:.4f}", "{:.5f}", "{:.5f}", "{:.5g}")))
     n = from_si(float(op.speed), "rpm")
-    kin = bs.ball_kinematics(b, op, a0, a0)
+    kin = ball_kinematics(b, op, a0, a0)
     out += ["", f"Kinematics at alpha_0, {n:.1f} rpm, {op.control} raceway control"]
     out += _pairs([("orbital (cage) speed", quantity(kin.orbital_speed, "rpm", ".2f")),
                    ("ball spin speed", quantity(kin.spin_speed, "rpm", ".2f")),
@@ -72,8 +72,8 @@ def info_text(case) -> str:
                    ("centrifugal force F_c", f"{float(kin.centrifugal):.3f} N"),
                    ("gyroscopic moment M_g", f"{float(kin.gyroscopic):.5f} N m")])
     shaft = from_si(float(op.speed), "rev_s")
-    f = bs.defect_frequencies(b, shaft, a0)
-    per_hz = bs.defect_frequencies(b, 1.0, a0)          # multiples of the shaft frequency
+    f = defect_frequencies(b, shaft, a0)
+    per_hz = defect_frequencies(b, 1.0, a0)          # multiples of the shaft frequency
     out += ["", f"Defect frequencies at alpha_0 (shaft {shaft:.3f} Hz); BSF once per ball revolution"]
     for name, field in (("FTF", "ftf"), ("BPFO", "bpfo"), ("BPFI", "bpfi"), ("BSF", "bsf"), ("2 BSF", "two_bsf")):
         out.append(f"  {name:<6} {float(getattr(f, field)):10.3f} Hz   {float(getattr(per_hz, field)):.5f} x shaft")

@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InputError
+from .jones import solve
 
 __all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
            "pit_depth", "pit_effective_depth", "pit_depth_of_solution", "unbridged_fraction",
@@ -80,8 +81,6 @@ def contact_of(sol, bearing, j, race="outer", centred=False) -> Contact:
 
 def contact_at(bearing, op, loads, center=0.0, hertz_method="exact", race="outer") -> Contact:
     """The ``race`` contact of the ball placed at azimuth ``center`` in the healthy bearing."""
-    from .jones import solve
-
     sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)
     psi = np.asarray(sol.azimuth)
     j = int(np.argmin(np.abs(np.angle(np.exp(1j * (psi - center))))))
@@ -127,8 +126,6 @@ def pit_effective_depth(bearing, op, loads, pit_diameter, machined_depth, center
     Hertzian) and the contact's entry/exit over the pit edges (the rectangular profile switches
     at the pit edges).
     """
-    from .jones import solve
-
     if location not in PIT_LOCATIONS:
         raise InputError(f"pit location must be one of {PIT_LOCATIONS}, got {location!r}")
     sol = solve(bearing, op, loads, cage_angle=center, hertz_method=hertz_method)

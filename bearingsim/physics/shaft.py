@@ -54,8 +54,10 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
 from .defect import as_defects, contact_depths
 from ..errors import InputError
 from .hertz import contact_ellipse, power_eval, stiffness_curve
-from .jones import RESULTS, JonesSolution, initial_displacement, raise_for, state_validity
+from .jones import (PRESSURE_WARNING, RESULTS, JonesSolution, OverloadWarning, initial_displacement, raise_for,
+                    state_validity)
 from .kinematics import Operation
+from .life import rating_life, set_life
 from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, step_status,
                      traced_tolerances)
 from ..programs import jit
@@ -303,7 +305,6 @@ def set_lives(bset, sol, C, rows=1):
     of every bearing of a solved set from its per-ball loads, and of the set (bearings fail
     independently): ``(L_k (..., N), L_set (...))``.  ``C``: basic dynamic load rating (N),
     scalar or (N,) (one per bearing)."""
-    from .life import rating_life, set_life
     C = jnp.broadcast_to(jnp.asarray(C, jnp.float64), (bset.n,))
     L = jnp.stack([rating_life(b, C[k], s.Q_inner, s.Q_outer, rows)
                    for k, (b, s) in enumerate(zip(bset.bearings, sol.bearings))], axis=-1)
@@ -911,8 +912,6 @@ def _warn_set_overload(bset, sol):
     converged set has a contact above :data:`~bearingsim.physics.jones.PRESSURE_WARNING`, naming the
     bearing, and its preload where that alone exceeds its static axial capacity C_0a."""
     import warnings
-
-    from .jones import PRESSURE_WARNING, OverloadWarning
 
     if int(sol.result) != 0:
         return

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.signal as ss
 
 from ..errors import InputError
-from ..signals.envelope import RecordMetrics, record_metrics
+from ..signals.envelope import RecordMetrics, record_metrics, squared_envelope
 
 __all__ = [
     "G",
@@ -208,8 +208,6 @@ def pass_interval_jitter(x, fs, shaft_hz, order=BPFO_ORDER, band=(2500.0, 5500.0
     of the peak heights and 0.85-1.15 nominal intervals apart count (weak passes drown in noise).
     Returns (std, robust std = 1.4826 MAD, number of intervals), as fractions of the interval.
     """
-    from ..signals.envelope import squared_envelope
-
     e = squared_envelope(x, fs, band)
     k = max(1, int(0.0005 * fs))
     e = np.convolve(e, np.ones(k) / k, "same")

@@ -31,10 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .background_fit import shaft_speed
+from ..case import case_from_dict, load_case
+from ..datasets.runner import make_dataset
+from ..datasets.writer import CHUNK_FORMAT
 from ..errors import InputError
 from .fault_size import (PASS_FEATURE_NAMES, angle_from_order, line_frequency, pass_features,
                          surface_speed)
 from ..names import CLASSES, noun_module
+from ..signals.envelope import envelope_spectrum
 from ..signals.features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from .records import MIN_SECONDS, check_record, read_record
 
@@ -64,8 +69,6 @@ MIN_PROBABILITY = 0.6
 
 def bank_spec(count=BANK_COUNT, seed=BANK_SEED, template="dataset_cwru_4class"):
     """The bank's data set spec: the shipped four-class spec at 12 kHz, 0.2 s items."""
-    from ..case import load_case
-
     spec = load_case(template) if not hasattr(template, "with_value") else template
     return (spec.with_value("dynamics.sample_rate_Hz", BANK_FS).with_value("dataset.duration_s", BANK_WINDOW_S)
             .with_value("dataset.count", int(count)).with_value("dataset.seed", int(seed)))
@@ -80,8 +83,6 @@ def cache_dir() -> Path:
 def bank_name(count, seed) -> str:
     """The cached bank's file name: its size and seed, and the data set format it was simulated
     with (a bank from an older engine, whose random streams or physics differ, is not reused)."""
-    from ..datasets import CHUNK_FORMAT
-
     return f"identify_bank_{count}_{seed}_v{CHUNK_FORMAT}.h5"
 
 
@@ -90,8 +91,6 @@ def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Pa
     :func:`cache_dir`) unless it is there.  Processes that need the same bank at once (test
     workers, notebooks, two shells) build it once: the others wait on a lock file beside it and
     then read it."""
-    from ..datasets import make_dataset
-
     path = Path(path) if path is not None else cache_dir() / bank_name(count, seed)
     if path.exists():
         return path
@@ -131,8 +130,6 @@ class _exclusive:
 def measured_shaft_speed(x, fs, nominal_hz) -> float:
     """The shaft frequency (Hz) of a record: the harmonic search of
     :func:`bearingsim.realism.background_fit.shaft_speed` within +-10 % of ``nominal_hz``."""
-    from .background_fit import shaft_speed
-
     return float(shaft_speed(np.asarray(x, float) - np.mean(x), fs, nominal_hz))
 
 
@@ -366,8 +363,6 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     ``min_seconds``: the shortest record accepted (the benchmark's round trip passes the bank's
     own 0.2 s; a record file must hold :data:`bearingsim.realism.records.MIN_SECONDS`).  ``what``:
     how messages name the record (its file name, from :func:`identify_file`)."""
-    from ..case import load_case
-
     case = load_case(case) if isinstance(case, (str, Path)) else case
     a = np.asarray(x)
     short = a.ndim == 1 and fs is not None and a.size < MIN_SECONDS * float(fs)
@@ -526,8 +521,6 @@ def twin_spec(r: Identification, count=16, seed=8001):
     so the compiled program is the bank's (the JAX compilation cache)."""
     import copy
 
-    from ..case import case_from_dict
-
     raw = copy.deepcopy(bank_spec(count, seed).raw)
     ds = raw["dataset"]
     ds["speed_rpm"] = [float(r.rpm), float(r.rpm)]
@@ -547,8 +540,6 @@ def twin_record(case, r: Identification, count=16, progress=False):
     import tempfile
 
     import h5py
-
-    from ..datasets import make_dataset
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "twin.h5"
@@ -581,8 +572,6 @@ def plot_identification(x, fs, r: Identification, twin=None, path=None, title=""
     its own peak) and four passes in time of the record and the first twin; returns the figure
     (saved to ``path`` when given).  ``twin``: (records (N, T) or (T,), fs)."""
     import matplotlib.pyplot as plt
-
-    from ..signals.envelope import envelope_spectrum
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 7))
     band = (2000.0, min(5500.0, 0.45 * fs))

@@ -77,10 +77,15 @@ from ..signals.background import Background
 from .background_fit import (MODULATION_HARMONICS, broadband_shape, fit_knocks, fit_lines, modulation_depths,
                              psd_resonances, shaft_speed, supply_lines)
 from ..case import case_from_dict, check_sampling, load_case, to_toml
+from ..datasets.runner import make_dataset
 from ..names import CLASSES
 from ..physics.defect import LOCATIONS
 from ..errors import InputError
+from ..output.io import atomic_path
+from ..output.report import calibration_text
 from .records import UNITS, check_record, read_record
+from ..signals.features import fault_orders
+from .transfer import REAL_RECORDS, transfer_benchmark, transfer_text
 
 __all__ = ["MachineCalibration", "calibrate_machine", "write_spec", "calibrated_transfer", "CalibratedTransfer",
            "GAIN_ITEMS", "GAIN_SPREAD", "SPEED_SPREAD", "RESONANCE_SPREAD", "DAMPING_SPREAD"]
@@ -127,8 +132,6 @@ def _record_rms(x):
 def _fit_gain(raw, fault_class, rpm, excess, fs, items=GAIN_ITEMS, seed=0, tmpdir=None):
     """(gain, median simulated rms) making items of ``fault_class`` at ``rpm`` match ``excess``."""
     import h5py
-
-    from ..datasets import make_dataset
 
     r = copy.deepcopy(raw)
     ds = r["dataset"]
@@ -296,8 +299,6 @@ def _background_table(bg: Background) -> dict:
 
 def write_spec(cal: MachineCalibration, path) -> Path:
     """Write the calibrated spec (TOML) atomically."""
-    from ..output.io import atomic_path
-
     path = Path(path)
     with atomic_path(path) as tmp:
         Path(tmp).write_text(cal.text, encoding="utf-8")
@@ -317,9 +318,6 @@ class CalibratedTransfer:
     seconds: float                     # the data set's simulation (compilation included)
 
     def text(self) -> str:
-        from ..output.report import calibration_text
-        from .transfer import transfer_text
-
         return "\n".join([f"calibrated on {', '.join(self.used)} only; tested on the other records: "
                           f"{', '.join(self.tested)}",
                           calibration_text(self.calibration),
@@ -337,10 +335,6 @@ def calibrated_transfer(template, data_dir, count=400, *, duration_s=0.2, out_di
     (:func:`bearingsim.realism.transfer.transfer_benchmark`, 0.2 s windows) on the real records
     (``records``, default :data:`bearingsim.realism.transfer.REAL_RECORDS`) that the calibration did not
     use.  ``out_dir``: where the spec and the data set go (default: a temporary folder, removed)."""
-    from ..datasets import make_dataset
-    from ..signals.features import fault_orders
-    from .transfer import REAL_RECORDS, transfer_benchmark
-
     data_dir = Path(data_dir)
     tpl = load_case(template) if isinstance(template, (str, Path)) else template
     x, fs, unit, rpm, _ = read_record(data_dir / f"{healthy}.npz", channel)

@@ -20,6 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..output.io import read_simulation
+from ..signals.envelope import amplitude_spectrum, envelope_spectrum, select_band
+from ..signals.features import fault_orders
+from .background_fit import shaft_speed
+from .records import RECORD_SUFFIXES, UNITS, read_record
 
 __all__ = ["RecordSpectrum", "Overlay", "record_spectrum", "read_overlay", "fault_line_table", "LINE_WINDOW",
            "MIN_RECORD_S"]
@@ -64,8 +69,6 @@ class RecordSpectrum:
 def fault_line_table(bearing, shaft_hz) -> dict:
     """name -> frequency (Hz) of the fault lines of ``bearing`` at ``shaft_hz`` (free contact
     angle, MODEL.md 8)."""
-    from ..signals.features import fault_orders
-
     o = fault_orders(bearing)
     f = float(shaft_hz)
     return {"BPFO": o.bpfo * f, "BPFI": o.bpfi * f, "BPFI-fr": (o.bpfi - 1.0) * f, "BPFI+fr": (o.bpfi + 1.0) * f,
@@ -127,8 +130,6 @@ def read_overlay(path, item=0) -> tuple[np.ndarray, float, float | None, str]:
                 return x, fs, shaft, f"{p.name} item {item}"
     except OSError as e:
         raise InputError(f"--overlay {p}: not a bearingsim simulate or dataset file ({e})") from None
-    from ..output.io import read_simulation
-
     try:
         sim = read_simulation(p)
     except InputError as e:
@@ -143,10 +144,6 @@ def record_spectrum(path, case, *, rpm=None, channel=None, sample_rate=None, uni
     """Spectra of the record file ``path`` with the fault lines of ``case`` (a Case; its bearing
     and, without ``rpm`` or a file rpm, its speed as the search centre); ``overlay``: a
     simulation file (see :func:`read_overlay`)."""
-    from .background_fit import shaft_speed
-    from .records import RECORD_SUFFIXES, UNITS, read_record
-    from ..signals.envelope import amplitude_spectrum, envelope_spectrum, select_band
-
     p = Path(path)
     if p.suffix.lower() not in RECORD_SUFFIXES:
         raise InputError(f"{p}: not a record file: give a .npz, .npy, .csv, .txt or .wav record "

@@ -36,8 +36,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..names import CLASSES
+from ..datasets import make_dataset
 from ..errors import InputError
+from ..names import CLASSES
+from ..signals.nuisance import INGREDIENTS
 from ..signals.features import FEATURE_NAMES, FaultOrders, cut_windows, window_features
 from ..signals.plain_features import PLAIN_FEATURE_NAMES, plain_features
 
@@ -422,8 +424,6 @@ def composed_dataset(spec, path, ingredients=None):
     every one of :data:`bearingsim.signals.nuisance.INGREDIENTS`; ``()``: none): the spec's ``[dataset]
     realism_ingredients`` set to them, so the data engine builds each inside its device program
     (:func:`bearingsim.signals.signal_stage.finish_items`).  Returns the data set's summary."""
-    from ..datasets import make_dataset
-    from ..signals.nuisance import INGREDIENTS
 
     ingredients = INGREDIENTS if ingredients is None else tuple(ingredients)
     return make_dataset(spec.with_value("dataset.realism_ingredients", list(ingredients)), path)
