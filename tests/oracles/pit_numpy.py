@@ -9,15 +9,8 @@ from bearingsim.physics.pit import Contact, PitDepth
 
 
 def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
-    """Fraction of a Hertz contact's load carried over a round pit.
-
-    ``a`` semi-axis across the track, ``b`` along it, ``pit_diameter`` and ``offset`` (the
-    distance across the track from the contact centre to the pit centre) in the same unit.  The
-    Hertz pressure ``p0 sqrt(1 - x^2/a^2 - y^2/b^2)`` is integrated over the disc analytically in
-    y and numerically in x (``n`` points, Simpson), divided by the load ``(2/3) pi a b p0``.
-    Limits: 1 for a pit that covers the contact, ``3 r^2 / (2 a b)`` for a centred pit of radius
-    r << b.
-    """
+    """The load fraction over a round pit (bearingsim.physics.pit.pit_load_fraction states the
+    integral), with scipy's Simpson rule on the actual points."""
     from scipy.integrate import simpson
 
     a, b, r, e = float(a), float(b), 0.5 * float(pit_diameter), abs(float(offset))
