@@ -574,9 +574,12 @@ def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
     p.write_text(spec().text)
     with pytest.raises(Stop):
         main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--count", "4", "--seed", "11",
-              "--duration-s", "0.01"])
+              "--duration-s", "0.01", "--sample-rate-Hz", "12000"])
     ds = seen[0].data["dataset"]
     assert (ds["count"], ds["seed"], ds["duration_s"]) == (4, 11, 0.01)
+    assert seen[0].dynamics_settings()["sample_rate"] == 12000.0          # issue 34: the records' rate
+    assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--sample-rate-Hz", "0"]) == 2
+    assert "--sample-rate-Hz 0" in capsys.readouterr().err
     assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--count", "0"]) == 2
     assert "--count 0" in capsys.readouterr().err
     assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--duration-s", "-1"]) == 2

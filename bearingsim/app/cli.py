@@ -359,12 +359,13 @@ def _spectrum_parser(sub):
 
 #: the data set flags that override a key of the spec
 _DATASET_FLAGS = (("count", "--count", "dataset.count"), ("seed", "--seed", "dataset.seed"),
-                  ("duration_s", "--duration-s", "dataset.duration_s"))
+                  ("duration_s", "--duration-s", "dataset.duration_s"),
+                  ("sample_rate_Hz", "--sample-rate-Hz", "dynamics.sample_rate_Hz"))
 
 
 def _dataset_overrides(case, args):
-    """The spec with ``--count``, ``--seed``, ``--duration-s`` set (validated as the keys are;
-    a refused value names its flag)."""
+    """The spec with ``--count``, ``--seed``, ``--duration-s``, ``--sample-rate-Hz`` set
+    (validated as the keys are; a refused value names its flag)."""
     if "dataset" not in case.data:
         return case
     for attr, flag, key in _DATASET_FLAGS:
@@ -543,6 +544,9 @@ def build_parser():
     s.add_argument("--count", type=int, metavar="N", help="items (overrides dataset.count)")
     s.add_argument("--seed", type=int, metavar="S", help="random seed (overrides dataset.seed)")
     s.add_argument("--duration-s", type=float, metavar="D", help="seconds per item (overrides dataset.duration_s)")
+    s.add_argument("--sample-rate-Hz", type=float, metavar="FS", dest="sample_rate_Hz",
+                   help="sample rate of the items in Hz, e.g. 12000 for the CWRU 12 kHz records (overrides "
+                        "dynamics.sample_rate_Hz)")
     s.add_argument("--device", choices=("cpu", "gpu"), help="run the chunks on this JAX device (default: "
                    "JAX's choice, the GPU where JAX sees one; the run says which)")
     s.add_argument("--chunk", type=_chunk_arg, metavar="N|auto", help="items per chunk (default: the "
