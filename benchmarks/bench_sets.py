@@ -1,6 +1,6 @@
 """Bearing-set benchmark (issue 21): the shaft solve on N bearings (bearingsim.physics.shaft).
 
-Harris 218 DB pair, 40 mm apart, rigid preload 2000 N (set solve, MODEL.md 10).
+Harris 218 DB pair, 40 mm apart, rigid preload 2000 N (set solve, docs/model.md section 10).
 
   (a) scipy reference (benchmarks/reference_scipy.py: solve_set, every ball of both bearings and
       the shaft in one hybr system from the static solution), one cold solve per load case at

@@ -1,6 +1,6 @@
-"""Independent plain numpy/scipy reference for MODEL.md sections 2-5.
+"""Independent plain numpy/scipy reference for docs/model.md sections 2-5.
 
-This module is deliberately written from MODEL.md alone (it does not use or import the
+This module is deliberately written from docs/model.md alone (it does not use or import the
 JAX package ``bearingsim``).  It serves two purposes:
 
 1. the "plain scipy baseline" that ``benchmarks/bench_static.py`` times against;
@@ -20,9 +20,9 @@ Contents
 Conventions (adopted project-wide)
 ----------------------------------
 (a) Q = K delta^1.5 for delta > 0 and a contact normal that points into its raceway
-    (cos alpha > 0), else 0 (MODEL.md section 3: a ball pushed past the inner groove-curvature
+    (cos alpha > 0), else 0 (docs/model.md section 3: a ball pushed past the inner groove-curvature
     centre has lost its inner contact; it never acts as a tie).
-(b) The friction / gyroscopic terms lambda (M_g / D) act exactly as MODEL.md writes them, for
+(b) The friction / gyroscopic terms lambda (M_g / D) act exactly as docs/model.md writes them, for
     every ball.  (A gate "only at a loaded contact" was tried first: under inner control it
     leaves the model without a solution when a ball leaves its inner raceway, see below.)
 (c) At omega = 0 a ball with no contact (total approach s - BD - H <= 0) is indeterminate; it is
@@ -57,7 +57,7 @@ a spall, continuation in the depth profile (H scaled 0 -> 1) from the healthy so
 
 Known limits of the model as specified (found with this code, see the cross-check tests)
 ---------------------------------------------------------------------------------------
-* Inner raceway control with balls that lose inner contact at speed: MODEL.md keeps the inner
+* Inner raceway control with balls that lose inner contact at speed: docs/model.md keeps the inner
   friction term lambda_i M_g/D for such a ball (no normal load under it).  Gating it at unloaded
   contacts makes the inner force jump by lambda_i M_g/D when the contact closes, and the system
   then generally has no solution (hybr stalls; with a smoothed gate the balls settle at
@@ -65,7 +65,7 @@ Known limits of the model as specified (found with this code, see the cross-chec
   "equal" control hardly care (a ball with outer contact only has alpha_o = 0, hence M_g = 0).
 * omega_m and omega_R are evaluated as omega n_i c_o / (n_i c_o + n_o c_i) and
   omega n_i n_o / ((n_i c_o + n_o c_i) g) (n = 1 -/+ g cos alpha, c = cos(alpha - beta)): the
-  MODEL.md expressions with the denominators cleared, regular when alpha_i - beta crosses 90 deg.
+  docs/model.md expressions with the denominators cleared, regular when alpha_i - beta crosses 90 deg.
 """
 from __future__ import annotations
 
@@ -252,7 +252,7 @@ def contact_ellipse(geom: Geometry, alpha, Q, inner: bool):
 # Section 4: kinematics
 # --------------------------------------------------------------------------------------------
 def kinematics(geom: Geometry, alpha_i, alpha_o, omega, control="outer"):
-    """beta, omega_m (orbital), omega_R (ball spin magnitude) per MODEL.md section 4."""
+    """beta, omega_m (orbital), omega_R (ball spin magnitude) per docs/model.md section 4."""
     g = geom.g
     if control in ("outer", "equal"):
         beta = np.arctan2(np.sin(alpha_o), np.cos(alpha_o) + g)
@@ -400,7 +400,7 @@ def _ball_state(ctx: _Ctx, X1, X2, A1, A2, H, omega, om_override=None):
     Fc = ctx.cf * 0.5 * geom.mass * geom.dm * om_m ** 2
     Mg = ctx.gy * geom.inertia * om_R * om_m * np.sin(beta)
     if om_override is not None:
-        # convention (d): omega_m is the undropped one; F_c and M_g as MODEL.md writes them at
+        # convention (d): omega_m is the undropped one; F_c and M_g as docs/model.md writes them at
         # that orbital speed and the ball's own angles.  M_g = J omega_R omega_m sin(beta) with
         # omega_R / omega_m = n_o / (g c_o) (independent of alpha_i; = own-angle values times
         # (omega_m_undropped / omega_m_own)^2 wherever the latter is finite)
@@ -414,7 +414,7 @@ def _ball_state(ctx: _Ctx, X1, X2, A1, A2, H, omega, om_override=None):
         om_R = np.where(use, ov * spin, om_R)
         om_m = np.where(use, ov, om_m)
     lam_i, lam_o = CONTROLS[ctx.control]
-    li = lam_i   # MODEL.md section 4 as written: the friction terms act for every ball
+    li = lam_i   # docs/model.md section 4 as written: the friction terms act for every ball
     lo = lam_o
     G = Qi * sai + li * (Mg / D) * cai
     Hf = Qi * cai - li * (Mg / D) * sai
@@ -850,7 +850,7 @@ def thrust_closed_form(geom: Geometry, Fa):
 
 
 # --------------------------------------------------------------------------------------------
-# A rigid shaft on N bearings (MODEL.md section 10)
+# A rigid shaft on N bearings (docs/model.md section 10)
 # --------------------------------------------------------------------------------------------
 def _set_frames(z, s):
     """(G, L) = (M T, T^T M) of a bearing at axial position z with facing s."""
@@ -863,7 +863,7 @@ def _set_frames(z, s):
 
 def solve_set(geoms, positions, facings, preloads, springs, loads, speed_rpm=0.0, control="outer",
               cage_angle=0.0, offsets=None, tol=None):
-    """Shaft on N bearings, MODEL.md 10, written from the page alone: bearing k at z_k with
+    """Shaft on N bearings, docs/model.md section 10, written from the page alone: bearing k at z_k with
     facing s_k, q_k = M_k T_k q_s + [0, 0, e_k, 0, 0] (rigid; e_k from the closed-form thrust
     at P_k, :func:`thrust_closed_form`, unless ``offsets`` are given) or, for a spring bearing,
     with its axial component replaced by its own approach v_k (one more unknown; u_k = (M T q)_z
@@ -1001,7 +1001,7 @@ def solve_set(geoms, positions, facings, preloads, springs, loads, speed_rpm=0.0
                                           Q_o=st["Q_o"]) for st in sts])
 
 
-if __name__ == "__main__":  # quick self-check against reference-data.md
+if __name__ == "__main__":  # quick self-check against docs/reference-data.md
     g = HARRIS_218
     hi = hertz_constant(g, g.alpha0, True, return_all=True)
     ho = hertz_constant(g, g.alpha0, False, return_all=True)

@@ -1,4 +1,4 @@
-"""Shared fixtures and independent checks (numpy re-derivations of MODEL.md section 4)."""
+"""Shared fixtures and independent checks (numpy re-derivations of docs/model.md section 4)."""
 import os
 
 import numpy as np
@@ -67,7 +67,7 @@ def pytest_collection_modifyitems(config, items):
 
 
 def harris218(n_balls=16, **kw):
-    """Harris & Kotzalas' 218 angular contact ball bearing (reference-data.md)."""
+    """Harris & Kotzalas' 218 angular contact ball bearing (docs/reference-data.md)."""
     return bs.Bearing(n_balls, 22.225e-3, 125.26e-3, 0.5232, 0.5232, np.deg2rad(40.0), **kw)
 
 
@@ -111,7 +111,7 @@ def ball_equilibrium_error(b, sol, op):
 
 def beyond_low_shoulder(b, sol):
     """True when a loaded contact of an angular contact bearing lies at or beyond its low shoulder
-    (MODEL.md 11), from the reported per-ball angles alone."""
+    (docs/model.md section 11), from the reported per-ball angles alone."""
     sh = np.asarray(b.shoulders)
     Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
     ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
@@ -121,7 +121,7 @@ def beyond_low_shoulder(b, sol):
 def at_groove_bottom(b, sol, loads):
     """True when a single angular contact bearing with a side load (radial or moment) carries it
     at the bottom of its groove: its most loaded inner contact below 1 deg (tan alpha ~ F_z / F_r
-    with one or two balls loaded; MODEL.md 11, the second reason of result 7), from the reported
+    with one or two balls loaded; docs/model.md section 11, the second reason of result 7), from the reported
     per-ball angles and the loads alone."""
     F = np.asarray(loads, float)
     Qi, ai = np.asarray(sol.Q_inner), np.asarray(sol.alpha_inner)
@@ -131,7 +131,7 @@ def at_groove_bottom(b, sol, loads):
 
 
 def beyond_high_shoulder(b, sol):
-    """True when a loaded contact lies at or beyond a high shoulder's edge (MODEL.md 11), from the
+    """True when a loaded contact lies at or beyond a high shoulder's edge (docs/model.md section 11), from the
     reported per-ball angles alone (the ball rides on the shoulder: result ``over_shoulder``)."""
     sh = np.asarray(b.shoulders)
     Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
@@ -140,7 +140,7 @@ def beyond_high_shoulder(b, sol):
 
 
 def inverted_contacts(sol):
-    """Number of loaded contacts whose normal points out of the raceway (MODEL.md section 3)."""
+    """Number of loaded contacts whose normal points out of the raceway (docs/model.md section 3)."""
     ai, ao = np.asarray(sol.alpha_inner), np.asarray(sol.alpha_outer)
     Qi, Qo = np.asarray(sol.Q_inner), np.asarray(sol.Q_outer)
     return int(np.sum((Qi > 0) & (np.cos(ai) <= 0)) + np.sum((Qo > 0) & (np.cos(ao) <= 0)))

@@ -1,4 +1,4 @@
-"""The per-ball kernel (bearingsim.physics.balls, MODEL.md sections 3-5) against independent forms."""
+"""The per-ball kernel (bearingsim.physics.balls, docs/model.md sections 3-5) against independent forms."""
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -14,7 +14,7 @@ OP = bs.Operation.from_rpm(10000.0)
 
 
 def test_transcendental_free_kinematics_equal_the_angle_form(b218):
-    """ball_kinematics_cs (sines and cosines only) against MODEL.md's formulas written with
+    """ball_kinematics_cs (sines and cosines only) against docs/model.md's formulas written with
     arctan and cos(alpha - beta) in numpy, for every control and angles across 0-100 deg."""
     rng = np.random.default_rng(1)
     ai, ao = np.radians(rng.uniform(0, 100, 50)), np.radians(rng.uniform(0, 80, 50))
@@ -53,7 +53,7 @@ def test_ball_equations_have_no_transcendental_functions(b218):
 
 
 def test_contact_rule_no_tie_past_the_inner_groove_centre(b218):
-    """MODEL.md 3: a ball whose centre is past the inner groove-curvature centre overlaps the
+    """docs/model.md section 3: a ball whose centre is past the inner groove-curvature centre overlaps the
     inner raceway's sphere (delta_i > 0) with the normal pointing out of the raceway: Q_i = 0."""
     curve = stiffness_curve(b218)
     a0 = float(b218.free_contact_angle)

@@ -1,4 +1,4 @@
-"""Outer-raceway spall (MODEL.md section 5): depth profiles and the spalled quasi-static state."""
+"""Outer-raceway spall (docs/model.md section 5): depth profiles and the spalled quasi-static state."""
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -134,7 +134,7 @@ def test_seed_findings_jump_grows_with_extent(b218):
     assert np.all(np.diff(drop) > 0) and np.all(np.diff(extra) > 0)
 
 
-# ------------------------------------------------------------------------------ inner raceway, ball (MODEL.md 9)
+# ------------------------------------------------------------------------------ inner raceway, ball (docs/model.md section 9)
 from bearingsim.physics.balls import ball_state, balls_at  # noqa: E402
 from bearingsim.physics.defect import ball_pit_depths, contact_depths  # noqa: E402
 from bearingsim.physics.hertz import stiffness_curve  # noqa: E402
@@ -240,7 +240,7 @@ def test_inner_spall_under_the_most_loaded_ball(b218, rpm):
     else:
         # carried by the cage at its undropped orbital speed: F_c alone holds it on the outer raceway
         assert float(s.Q_outer[0]) == pytest.approx(float(s.centrifugal[0]), rel=1e-6)
-        # ... at the orbital speed of its undropped centre (same q, no defect), MODEL.md 5
+        # ... at the orbital speed of its undropped centre (same q, no defect), docs/model.md section 5
         from bearingsim.physics.balls import groove_centre_offsets
         A1, A2 = groove_centre_offsets(b218, s.displacement, s.azimuth)
         wu = ball_state(b218, op, s.undropped_position[0], A1[0], A2[0], stiffness_curve(b218)).orbital_speed

@@ -1,4 +1,4 @@
-"""Hertz point contact (MODEL.md section 3) against scipy, closed forms and its own equation
+"""Hertz point contact (docs/model.md section 3) against scipy, closed forms and its own equation
 (the literature tables are in tests/validation/test_literature.py)."""
 import jax
 import jax.numpy as jnp

@@ -1,5 +1,5 @@
-"""The flat Jones solver (MODEL.md section 4): equilibrium, symmetry, limits, stiffness, result
-codes and the validity rule (MODEL.md section 3).  Literature values: tests/validation/."""
+"""The flat Jones solver (docs/model.md section 4): equilibrium, symmetry, limits, stiffness, result
+codes and the validity rule (docs/model.md section 3).  Literature values: tests/validation/."""
 import functools
 
 import jax
@@ -250,7 +250,7 @@ def test_pressure_above_static_capacity_warns(b218):
     assert float(sol.max_pressure) > jones.PRESSURE_WARNING
 
 
-# ---------------------------------------------------------------------------- validity (MODEL.md 3)
+# ---------------------------------------------------------------------------- validity (docs/model.md section 3)
 # The case a new user reported: a deep ball-path spall; the old solver returned "converged" with
 # ball 0 at alpha_i = -179.2 deg carrying 31 kN as a tie and the ring displaced towards +x.
 USER_BEARING = dict(n_balls=14, ball_diameter=10.63e-3, pitch_diameter=52.65e-3, f_inner=0.517,

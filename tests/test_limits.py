@@ -1,4 +1,4 @@
-"""Per-contact limits (MODEL.md 11): pressure, the friction raceway control needs, the contact
+"""Per-contact limits (docs/model.md section 11): pressure, the friction raceway control needs, the contact
 ellipse against the shoulders -- against hand computations and a real solve."""
 from types import SimpleNamespace
 

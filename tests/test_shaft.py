@@ -1,4 +1,4 @@
-"""A shaft on N bearings (MODEL.md section 10): every check of the section against an independent
+"""A shaft on N bearings (docs/model.md section 10): every check of the section against an independent
 truth (the single-bearing solve, the closed form of section 4 at omega = 0, symmetry, statics).
 
 Compiled programs are shared: one N = 1 set program (both facings in one batch), one program for

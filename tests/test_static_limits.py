@@ -9,7 +9,7 @@ from bearingsim.app import workflows
 from bearingsim.case import parse_case
 from bearingsim.app.cli import main
 
-# reference-data.md, ISO/TS 16281 example 1: deep groove, zero clearance, Fr = 1000 N, C = 23.4 kN
+# docs/reference-data.md, ISO/TS 16281 example 1: deep groove, zero clearance, Fr = 1000 N, C = 23.4 kN
 ISO_CASE = """\
 title = "ISO/TS 16281 example 1"
 [bearing]
@@ -65,7 +65,7 @@ def test_static_prints_and_writes_limits_and_life(tmp_path, capsys):
     out = tmp_path / "s.json"
     assert main(["static", str(p), "--json", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "Limits (MODEL.md 11)" in text and "L10r = " in text and "h at the case's speed" in text
+    assert "Limits (docs/model.md section 11)" in text and "L10r = " in text and "h at the case's speed" in text
     d = json.loads(out.read_text())
     life, lim = d["life"], d["limits"]
     assert life["dynamic_load_rating_kN"] == 23.4 and life["nominal_contact_angle_deg"] == 0.0

@@ -1,4 +1,4 @@
-"""Cage-angle sweeps (MODEL.md section 6): one batched warm-started Newton over all angles."""
+"""Cage-angle sweeps (docs/model.md section 6): one batched warm-started Newton over all angles."""
 import jax
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The [set] section: a shaft on several bearings (MODEL.md 10) -- its cross-checks (one message
+"""The [set] section: a shaft on several bearings (docs/model.md section 10) -- its cross-checks (one message
 per problem, naming the key) and the :class:`bearingsim.physics.shaft.BearingSet` it describes."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The shaft/housing model (MODEL.md section 7): its right-hand side, its equilibrium at t = 0
+"""The shaft/housing model (docs/model.md section 7): its right-hand side, its equilibrium at t = 0
 and its linear modes.
 
 Degrees of freedom (10 states, SI): shaft / inner-ring translations ``x_s, y_s, z_s`` (mass

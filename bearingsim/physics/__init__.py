@@ -1,4 +1,4 @@
-"""The physics core: the quasi-static bearing model and what is judged from a state (MODEL.md
+"""The physics core: the quasi-static bearing model and what is judged from a state (docs/model.md
 sections 2-6, 10, 11).  Pure JAX in float64; imports nothing but the package's infrastructure
 (``errors``, ``names``, ``xla``, ``fastmath``).  The modules, in the order of the flow:
 

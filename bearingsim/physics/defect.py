@@ -1,4 +1,4 @@
-"""Localized defects (MODEL.md sections 5 and 9): a spall on the outer raceway, a spall on the
+"""Localized defects (docs/model.md sections 5 and 9): a spall on the outer raceway, a spall on the
 inner raceway, or a pit on one ball.
 
 A defect is a depth profile that reduces a ball's contact deformation where the ball meets it:
@@ -24,7 +24,7 @@ Conventions (``Spall.center``):
 
 The same two profiles for every location ("rectangular", "ball-path") and the same sag rule: the
 contact can close only as far as a ball (radius D/2) spanning the defect's chord allows.  The
-curvature of the raceway in the rolling direction is neglected (as for the outer spall, MODEL.md
+curvature of the raceway in the rolling direction is neglected (as for the outer spall, docs/model.md
 5): it changes the sag-limited depth by a factor of about 1 -/+ D / (2 R) (outer / inner).
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Bearing geometry and materials (MODEL.md section 2).
+"""Bearing geometry and materials (docs/model.md section 2).
 
 Everything is SI (m, Pa, kg/m^3) and radians.  ``Bearing`` is an equinox
 module: a pytree whose float fields can be traced, vmapped and differentiated,
@@ -69,7 +69,7 @@ class Bearing(eqx.Module):
     contact angle alpha_0 in rad.  Use :meth:`from_clearance` to give the
     diametral clearance P_d instead (cos alpha_0 = 1 - P_d/(2BD)).
 
-    Shoulders (MODEL.md 11; docs/physics.md "Shoulders"): each ring's groove spans contact angles
+    Shoulders (docs/model.md section 11; docs/physics.md "Shoulders"): each ring's groove spans contact angles
     from -theta_low to +theta_high, measured at its curvature centre from the groove bottom,
     positive on the side of the bearing's contact direction (outer ring +z, inner ring -z).
     ``shoulder_angles`` = [inner high, inner low, outer high, outer low] (rad) or None for the
@@ -136,7 +136,7 @@ class Bearing(eqx.Module):
             return jnp.where(self.angular_contact, angles("angular_contact"), angles("deep_groove"))
         return angles(self.design)
 
-    # -- derived quantities (MODEL.md section 2) ---------------------------------
+    # -- derived quantities (docs/model.md section 2) ---------------------------------
     @property
     def B(self):
         """Total conformity B = f_i + f_o - 1."""
@@ -166,7 +166,7 @@ class Bearing(eqx.Module):
     @property
     def inner_raceway_radius(self):
         """R_ir = (d_m - D cos alpha_0)/2: radius along which an inner-raceway spall's arc length is
-        measured (m; MODEL.md section 9)."""
+        measured (m; docs/model.md section 9)."""
         return 0.5 * (self.pitch_diameter - self.ball_diameter * jnp.cos(self.free_contact_angle))
 
     @property

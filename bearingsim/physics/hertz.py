@@ -1,4 +1,4 @@
-"""Hertz point contact (MODEL.md section 3), pure JAX and differentiable.
+"""Hertz point contact (docs/model.md section 3), pure JAX and differentiable.
 
 Complete elliptic integrals come from the arithmetic-geometric mean (quadratic
 convergence, exact to machine precision in a fixed number of steps); the
@@ -156,7 +156,7 @@ def contact_constant(kappa, K_ell, E_ell, sum_rho, E_eff):
 def hertz_contact(bearing, alpha, inner: bool, method: str = "exact") -> HertzContact:
     """Hertz constants of the inner (``inner=True``) or outer contact at contact angle ``alpha`` (rad).
 
-    Evaluated at the contact's own angle (gamma = D cos(alpha)/d_m), as MODEL.md requires.
+    Evaluated at the contact's own angle (gamma = D cos(alpha)/d_m), as docs/model.md requires.
     """
     D = bearing.ball_diameter
     gamma = D * jnp.cos(alpha) / bearing.pitch_diameter

@@ -1,4 +1,4 @@
-"""Ball kinematics under raceway control and defect frequencies (MODEL.md sections 4 and 8).
+"""Ball kinematics under raceway control and defect frequencies (docs/model.md sections 4 and 8).
 
 Outer ring fixed, inner ring turning at omega = 2 pi n / 60 (rad/s).
 """
@@ -12,7 +12,7 @@ import jax.numpy as jnp
 from ..errors import InputError
 from ..fastmath import recip, rsqrt
 
-#: Raceway-control factors (lambda_i, lambda_o) of MODEL.md section 4.
+#: Raceway-control factors (lambda_i, lambda_o) of docs/model.md section 4.
 CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)}
 _DEN_FLOOR = 0.05
 
@@ -135,7 +135,7 @@ class DefectFrequencies(NamedTuple):
 
 
 def defect_frequencies(bearing, shaft_hz, alpha=None) -> DefectFrequencies:
-    """FTF, BPFO, BPFI, BSF (MODEL.md section 8) at contact angle ``alpha`` (rad, default alpha_0)."""
+    """FTF, BPFO, BPFI, BSF (docs/model.md section 8) at contact angle ``alpha`` (rad, default alpha_0)."""
     alpha = bearing.free_contact_angle if alpha is None else alpha
     f = jnp.asarray(shaft_hz, dtype=jnp.float64)
     gc = bearing.g * jnp.cos(alpha)

@@ -1,5 +1,5 @@
 """ISO/TS 16281 basic reference rating life of ball bearings from their load distribution
-(MODEL.md section 11).
+(docs/model.md section 11).
 
 Every function is pure ``jax.numpy``, SI (N, m, rad) and batchable over leading axes; per-ball
 arrays have the balls on the last axis.  With C the basic dynamic load rating (catalogue, N),
@@ -53,7 +53,7 @@ def nominal_angle(bearing, contact_angle=None):
     """The nominal contact angle alpha of ISO 281 / ISO/TS 16281 (rad): ``contact_angle`` when
     given, else ``bearing.free_contact_angle``.  A deep-groove bearing's nominal angle is 0 even
     when its clearance gives it a free contact angle (``Bearing.from_clearance``): pass 0 then
-    (the ISO/TS 16281 example 3 of reference-data.md, 0.010 mm clearance, alpha_0 = 7.6 deg,
+    (the ISO/TS 16281 example 3 of docs/reference-data.md, 0.010 mm clearance, alpha_0 = 7.6 deg,
     agrees to 7e-5 with alpha = 0 and is 1.9 % off with alpha = alpha_0)."""
     return bearing.free_contact_angle if contact_angle is None else _f64(contact_angle)
 

@@ -1,4 +1,4 @@
-"""Limits of a healthy bearing's state, per contact (MODEL.md section 11): contact pressure, the
+"""Limits of a healthy bearing's state, per contact (docs/model.md section 11): contact pressure, the
 friction coefficient that raceway control needs, the contact ellipse against the shoulders.
 
 Pure ``jax.numpy`` on a :class:`~bearingsim.physics.jones.JonesSolution` (any leading batch axes, balls
@@ -9,7 +9,7 @@ solve refuses a state whose loaded contact centre lies at or beyond a shoulder e
 
 * Pressure: ``p_max / pressure_limit`` per contact; the ISO 76 static-capacity stress of ball
   bearings, 4.2 GPa, is the default (permanent deformation ~1e-4 D starts there).
-* Friction: the raceway-control hypothesis (MODEL.md 4) makes the controlling contact's friction
+* Friction: the raceway-control hypothesis (docs/model.md section 4) makes the controlling contact's friction
   supply the whole gyroscopic moment M_g: the friction force lambda M_g / D at a contact with
   control factor lambda (outer control: 2 M_g / D at the outer contact), so the friction
   coefficient it needs is mu = lambda |M_g| / (D Q).  ``friction_ratio`` = mu / (the available

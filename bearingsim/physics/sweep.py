@@ -1,4 +1,4 @@
-"""Cage-angle sweeps (MODEL.md section 6): the quasi-static contact state as the ball set
+"""Cage-angle sweeps (docs/model.md section 6): the quasi-static contact state as the ball set
 rotates past the defect.
 
 The angles fall into runs over which the same balls are over the defect.  One angle of each run
@@ -14,7 +14,7 @@ profile, whose state jumps when a ball enters or leaves the spall, the angles ju
 just after every edge are inserted into the grid.
 
 :func:`sweep_defect_angle` sweeps the centre of one defect at a fixed cage angle instead (the
-inner-raceway spall's azimuth psi_di = phi_d + omega t, a ball pit's spin angle; MODEL.md 9),
+inner-raceway spall's azimuth psi_di = phi_d + omega t, a ball pit's spin angle; docs/model.md section 9),
 with the same strategy: the quasi-static state of an inner spall depends on both the cage
 angle and the spall azimuth, and either may be swept with the other held.
 """
@@ -244,7 +244,7 @@ def sweep_defect_angle(bearing, op, loads, spall, centers=None, *, which=0, cage
     with a leading (N,) axis (``cage_angle`` is the same for every item).
 
     The swept ``center`` is that of defect ``which`` (``spall`` a Spall or a tuple of them):
-    for an inner-raceway spall its azimuth psi_di = phi_d + omega t in the fixed frame (MODEL.md
+    for an inner-raceway spall its azimuth psi_di = phi_d + omega t in the fixed frame (docs/model.md
     9: the spall turns with the inner ring while the balls stand at the given cage angle); for
     a ball pit its spin angle theta_b (0: in the outer contact, pi: in the inner contact); for an
     outer spall its azimuth.  Give ``centers`` (rad) or ``start``/``stop`` (rad; default one ball

@@ -3,7 +3,7 @@ arrays, no files): the surface speed that maps an event spacing to a defect leng
 angle from a measured fault order, the measured fault line, and the path-robust features of a
 ball's passage over a defect that the size estimator learns from.
 
-Kinematics (MODEL.md section 8, g = D/d_m): the contact point travels over a defect at
+Kinematics (docs/model.md section 8, g = D/d_m): the contact point travels over a defect at
     outer race   v = R_o 2 pi FTF              (R_o = (d_m + D cos a0)/2, the outer raceway radius)
     inner race   v = R_ir 2 pi (f_r - FTF)     (R_ir = (d_m - D cos a0)/2)
     ball pit     v = (D/2) 2 pi BSF            (BSF: ball turns per second)

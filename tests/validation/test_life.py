@@ -1,4 +1,4 @@
-"""ISO/TS 16281 rating life (MODEL.md section 11): the published examples of reference-data.md
+"""ISO/TS 16281 rating life (docs/model.md section 11): the published examples of docs/reference-data.md
 (the public peer minzhun/ISO16281) through the Jones solve, and closed-form checks of the formulas."""
 import jax
 import jax.numpy as jnp
@@ -8,7 +8,7 @@ import pytest
 import bearingsim as bs
 from bearingsim.physics import life
 
-# reference-data.md: deep-groove ball bearing, Z = 7, D = 11.5 mm, d_m = 43.5 mm, f_i = 0.52,
+# docs/reference-data.md: deep-groove ball bearing, Z = 7, D = 11.5 mm, d_m = 43.5 mm, f_i = 0.52,
 # f_o = 0.53, E = 210 GPa, nu = 0.3 (both bodies), C = 23.4 kN, zero speed.
 ISO_MATERIAL = bs.Material(210e9, 0.3, 7850.0)
 ISO_C = 23.4e3
@@ -16,7 +16,7 @@ STATIC = bs.Operation(0.0, "outer", 0.0, 0.0)
 
 
 def iso_bearing(clearance):
-    """The example bearing; ISO's "radial clearance" is the diametral play P_d of MODEL.md 2."""
+    """The example bearing; ISO's "radial clearance" is the diametral play P_d of docs/model.md section 2."""
     return bs.Bearing.from_clearance(7, 11.5e-3, 43.5e-3, 0.52, 0.53, clearance, ISO_MATERIAL,
                                      ISO_MATERIAL)
 

@@ -1,7 +1,7 @@
-"""Literature benchmarks: every assertion names its source (reference-data.md, MODEL.md).
+"""Literature benchmarks: every assertion names its source (docs/reference-data.md, docs/model.md).
 
 Harris & Kotzalas (2006) Table 6.1 (Hertz), Table 7.4 (Sjovall integrals), the Harris 218
-bearing's published constants and static thrust solution, the closed forms of MODEL.md section 4
+bearing's published constants and static thrust solution, the closed forms of docs/model.md section 4
 (pure thrust, Stribeck 4.37) and the CWRU defect-frequency multipliers.
 """
 import functools
@@ -18,7 +18,7 @@ from conftest import DEG
 
 HARRIS_6_1 = "Harris & Kotzalas (2006) vol. 1 Table 6.1"
 HARRIS_7_4 = "Harris & Kotzalas (2006) vol. 1 Table 7.4"
-H218 = "Harris 218 bearing (reference-data.md)"
+H218 = "Harris 218 bearing (docs/reference-data.md)"
 
 # F(rho), a*, b*, delta*
 TABLE_6_1 = [
@@ -58,19 +58,19 @@ def test_harris_218_contact_constants(b218):
 
 
 def test_steel_dimensional_formulas(b218):
-    """reference-data.md: a = 0.0236 a* (Q/sum_rho)^(1/3), delta = 2.79e-4 delta* Q^(2/3)
+    """docs/reference-data.md: a = 0.0236 a* (Q/sum_rho)^(1/3), delta = 2.79e-4 delta* Q^(2/3)
     sum_rho^(1/3) (mm, N, 1/mm); the printed constants have 3 digits, so 0.5 %."""
     c = bs.hertz_contact(b218, np.deg2rad(40.0), True)
     Q = 2000.0
     a, b, p = hertz.semi_axes(c, Q, b218.effective_modulus)
     a_s, b_s, d_s = bs.dimensionless_hertz(c.F_rho)
     srho = float(c.sum_rho) / 1e3
-    src = "reference-data.md steel-on-steel formulas"
+    src = "docs/reference-data.md steel-on-steel formulas"
     assert abs(float(a) * 1e3 / (0.0236 * float(a_s) * (Q / srho) ** (1 / 3)) - 1) < 5e-3, src
     assert abs(float(b) * 1e3 / (0.0236 * float(b_s) * (Q / srho) ** (1 / 3)) - 1) < 5e-3, src
     delta = (Q / float(c.K)) ** (2 / 3) * 1e3
     assert abs(delta / (2.79e-4 * float(d_s) * Q ** (2 / 3) * srho ** (1 / 3)) - 1) < 5e-3, src
-    assert abs(float(p) - 3 * Q / (2 * np.pi * float(a) * float(b))) < 1e-6 * float(p), "MODEL.md 3"
+    assert abs(float(p) - 3 * Q / (2 * np.pi * float(a) * float(b))) < 1e-6 * float(p), "docs/model.md section 3"
 
 
 @pytest.mark.parametrize("Fa, alpha_deg, Q, dz_mm", [(22250.0, 41.72, 2089.6, 0.0415),
@@ -85,7 +85,7 @@ def test_harris_218_published_static_thrust(b218, Fa, alpha_deg, Q, dz_mm):
 
 
 def test_static_thrust_closed_form_1e6(b218):
-    """MODEL.md 4: Fz / (Z K_n (BD)^1.5) = sin(a) (cos a0 / cos a - 1)^1.5, K_n at the solved angle."""
+    """docs/model.md section 4: Fz / (Z K_n (BD)^1.5) = sin(a) (cos a0 / cos a - 1)^1.5, K_n at the solved angle."""
     op = bs.Operation.from_rpm(0.0)
     loads = np.array([[0, 0, Fa, 0, 0] for Fa in (500.0, 5000.0, 17800.0, 22250.0, 60000.0)])
     sols = bs.solve_batch(b218, op, loads)
@@ -97,7 +97,7 @@ def test_static_thrust_closed_form_1e6(b218):
         Kn = (Ki ** (-2 / 3) + Ko ** (-2 / 3)) ** -1.5
         lhs = Fa / (16 * Kn * BD ** 1.5)
         rhs = np.sin(a) * (np.cos(a0) / np.cos(a) - 1) ** 1.5
-        assert abs(lhs / rhs - 1) < 1e-6, f"MODEL.md 4 pure-thrust closed form at {Fa} N"
+        assert abs(lhs / rhs - 1) < 1e-6, f"docs/model.md section 4 pure-thrust closed form at {Fa} N"
 
 
 def test_pure_thrust_stiffness_closed_form(b218):
@@ -111,7 +111,7 @@ def test_pure_thrust_stiffness_closed_form(b218):
 
 
 def test_stribeck_4_37_zero_clearance_large_Z():
-    """MODEL.md 4 (Stribeck): radial load, zero clearance, Z = 60: Q_max Z / F_r = 4.37 within 1 %."""
+    """docs/model.md section 4 (Stribeck): radial load, zero clearance, Z = 60: Q_max Z / F_r = 4.37 within 1 %."""
     b = bs.Bearing(60, 4e-3, 125.26e-3, 0.52, 0.52, 0.0)
     sol = bs.solve(b, bs.Operation.from_rpm(0.0), bs.Loads(radial_x=2000.0))
     ratio = float(sol.Q_inner.max()) * 60 / 2000.0
@@ -164,7 +164,7 @@ def test_harris_table_7_4_approached_as_Z_grows(row):
 
 
 def test_defect_frequencies_cwru_multipliers():
-    """CWRU drive end 6205 (reference-data.md): BPFO 3.5848, BPFI 5.4152, FTF 0.39828, 2 BSF 4.7135."""
+    """CWRU drive end 6205 (docs/reference-data.md): BPFO 3.5848, BPFI 5.4152, FTF 0.39828, 2 BSF 4.7135."""
     b = bs.Bearing(9, 0.3126 * 25.4e-3, 1.537 * 25.4e-3, 0.52, 0.52, 0.0)
     f = bs.defect_frequencies(b, 1.0)
     src = "CWRU published defect frequencies"

@@ -1,6 +1,6 @@
 """Cross-check of the JAX Jones solver against the independent numpy/scipy reference.
 
-``benchmarks/reference_scipy.py`` is written from MODEL.md alone (it does not use bearingsim).
+``benchmarks/reference_scipy.py`` is written from docs/model.md alone (it does not use bearingsim).
 Each case below is solved by both codes and compared at fixed tolerances:
 0.01 deg in contact angles, 0.1 % of the largest contact load in Q, 0.1 % of the largest
 displacement component (tilts taken as displacements at R_i) in q.  The cases were chosen to
@@ -67,7 +67,7 @@ CASES = [
      dict(loads=[4000, 0, 10000, 0, 0], speed_rpm=10000, cage_angle=math.radians(2.8125),
           spall=dict(SPALL, profile="ball-path"))),
     # issue 8: a ball pushed past the inner groove-curvature centre by a 0.5 mm ball-path spall
-    # (the old solver reported it as a 31 kN tie); MODEL.md section 3 contact rule on both sides
+    # (the old solver reported it as a 31 kN tie); docs/model.md section 3 contact rule on both sides
     ("issue8-deep-ball-path-spall-7600rpm", ref.Geometry(14, 10.63e-3, 52.65e-3, 0.517, 0.536,
                                                           math.radians(14.8)),
      dict(loads=[-5042, 2840, 2210, -9.27, -1.18], speed_rpm=7600, cage_angle=math.radians(4.01),
@@ -146,9 +146,9 @@ def test_crosscheck(name, geom, kw):
 
 
 # ---------------------------------------------------------------------------------------------
-# Corner cases found by the reference (formerly disagreements, now both follow MODEL.md):
+# Corner cases found by the reference (formerly disagreements, now both follow docs/model.md):
 # kinematics through alpha_i - beta = 90 deg (denominators cleared), and inner raceway control
-# with balls off their inner raceway (friction terms as MODEL.md writes them).
+# with balls off their inner raceway (friction terms as docs/model.md writes them).
 # ---------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("control,alpha_i_deg", [("outer", 90.0), ("outer", 92.0),
                                                  ("inner", 86.0)])
@@ -176,7 +176,7 @@ def test_crosscheck_inner_control_balls_off_inner_raceway():
 @pytest.mark.parametrize("Fa,alpha_deg,Q,dz_mm", [(22250.0, 41.72, 2089.6, 0.0415),
                                                    (17800.0, 41.495, 1679.1, 0.0359)])
 def test_reference_reproduces_harris_218(Fa, alpha_deg, Q, dz_mm):
-    """The reference itself against the published Harris 218 numbers (reference-data.md)."""
+    """The reference itself against the published Harris 218 numbers (docs/reference-data.md)."""
     hi = ref.hertz_constant(H218, H218.alpha0, True) / 1e3 ** 1.5
     ho = ref.hertz_constant(H218, H218.alpha0, False) / 1e3 ** 1.5
     assert hi == pytest.approx(1.297e6, rel=1e-3)

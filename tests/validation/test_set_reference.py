@@ -1,4 +1,4 @@
-"""The set solve (bearingsim.physics.shaft) against the independent numpy/scipy reference of MODEL.md 10
+"""The set solve (bearingsim.physics.shaft) against the independent numpy/scipy reference of docs/model.md section 10
 (``benchmarks/reference_scipy.py: solve_set``, written from the page alone: every ball of every
 bearing and the shaft in one hybr system).  Agreement <= 1e-9 relative (issue 21 target): shaft
 displacement (tilts as displacements at 0.1 m), each bearing's loads, every ball's contact loads
