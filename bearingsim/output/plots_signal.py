@@ -16,7 +16,8 @@ import numpy as np
 from ..case.units import from_si
 from ..errors import InputError, InputTypeError
 from ..names import CLASSES
-from ..signals.envelope import EnvelopeSpectrum, Spectrum, defect_markers
+from ..signals.envelope import EnvelopeSpectrum, Spectrum
+from ..signals.lines import defect_markers
 
 __all__ = ["plot_envelope_spectrum", "plot_time_history", "plot_transfer", "plot_record_spectrum"]
 
@@ -62,7 +63,7 @@ def plot_envelope_spectrum(spectrum: Spectrum, markers, title: str = "", fmax=No
     """Squared-envelope spectrum (linear amplitude) with labelled defect-frequency markers.
 
     spectrum : :class:`~bearingsim.signals.envelope.EnvelopeSpectrum` (a plain ``Spectrum`` also works)
-    markers  : list of ``(label, frequency_Hz)`` as from :func:`~bearingsim.signals.envelope.defect_markers`
+    markers  : list of ``(label, frequency_Hz)`` as from :func:`~bearingsim.signals.lines.defect_markers`
                (a dict is expanded with it).  ``"kxNAME"`` labels are drawn as harmonics of
                NAME in the same colour; BPFO is red, FTF green, shaft blue, others distinct.
     fmax     : upper frequency limit (Hz); default 1.2 x the highest marker (capped at fs/2).
@@ -221,6 +222,28 @@ def plot_transfer(reports, path=None):
     return fig
 
 
+def _draw_thresholds(ax, verdicts, fmax):
+    """Each fault line's detection threshold over its search window (a bar at the level a peak
+    must pass) and the peak, filled when detected."""
+    first = True
+    for v in verdicts.values():
+        if v.detected is None or not (0.0 < v.expected_hz <= fmax):
+            continue
+        level = v.floor * 10.0 ** (v.threshold_db / 20.0)
+        half = max(v.window_hz, 0.004 * fmax)          # the window, at least visible
+        ax.hlines(level, v.expected_hz - half, v.expected_hz + half, color="#d62728", lw=2.2,
+                  label=f"detection threshold ({100 * v.false_alarm:g} % false alarms per line)" if first else None,
+                  zorder=3)
+        peak = v.floor * 10.0 ** (v.strength_db / 20.0)
+        ax.plot(v.peak_hz, peak, "v", ms=6, color="#d62728", mfc="#d62728" if v.detected else "white", zorder=4,
+                label="line peak (filled: detected)" if first else None)
+        first = False
+    if not first:
+        old = ax.get_legend()
+        ax.legend(loc="upper right", fontsize=8, framealpha=0.9, bbox_to_anchor=(1.0, 0.80), title_fontsize=8,
+                  title=old.get_title().get_text() if old is not None else None)
+
+
 def plot_record_spectrum(rs, path=None, fmax=None):
     """A record's squared-envelope spectrum with the bearing's fault lines (BPFO and BPFI with
     harmonics, BPFI -/+ f_r, 2 BSF, FTF, shaft) and, on its own axis, a simulation's (``rs.overlay``);
@@ -236,6 +259,7 @@ def plot_record_spectrum(rs, path=None, fmax=None):
                            title=f"{Path(rs.source).name}{f' ({rs.channel})' if rs.channel else ''}: squared-envelope "
                                  f"spectrum\nfault lines of {rs.case_title.split(',')[0]} at shaft "
                                  f"{60 * rs.shaft_hz:.1f} rpm ({rs.shaft_source.split(' (')[0]})")
+    _draw_thresholds(ax, rs.verdicts or {}, fmax)
     if rs.overlay is not None:
         ov = rs.overlay
         tw = ax.twinx()
@@ -247,7 +271,7 @@ def plot_record_spectrum(rs, path=None, fmax=None):
         tw.set_ylim(0.0, 1.32 * top if top > 0 else 1.0)
         tw.set_ylabel("simulation: squared-envelope amplitude ((m/s²)²)", color="#ff7f0e")
         tw.tick_params(axis="y", colors="#ff7f0e")
-        tw.legend(loc="upper right", bbox_to_anchor=(1.0, 0.33), fontsize=8, framealpha=0.9)
+        tw.legend(loc="upper right", bbox_to_anchor=(1.0, 0.25), fontsize=8, framealpha=0.9)
     f, A = rs.spectrum.freqs, rs.spectrum.amplitude
     ax2.semilogy(f[1:], np.maximum(A[1:], 1e-12), color="0.2", lw=0.6, label="amplitude spectrum")
     ax2.axvspan(*rs.band, color="#ff7f0e", alpha=0.15, label=f"demodulation band {rs.band[0]:.0f}–{rs.band[1]:.0f} Hz")

@@ -12,6 +12,7 @@ fault from a record.  Builds on the core, ``case``, ``output`` and ``datasets``.
 ``fault_size``      the physics of an identified fault (length, contact angle)
 ``identify``        a fault's class, size and operating point from a record
 ``record_spectrum`` a real record against a bearing's fault lines
+``detection``       a fault line's verdict at a stated false-alarm rate
 """
 
 
