@@ -120,7 +120,7 @@ def test_set_refusals_name_their_reason_instead_of_crashing(tmp_path, capsys):
     """Codes 6-9 of a set used to crash (AttributeError '_Codes' has no 'loads'): a DT pair under a
     reverse axial load (7) and a preload of 1e9 N (6) raise InvalidStateError from Python and exit
     3 with one message from the command line; the hints are a set's."""
-    from bearingsim.app.sets import solve_set_case
+    from bearingsim.app.set_workflows import solve_set_case
 
     dt = 'title = "dt"\n' + SET.format(axial=-5000, set='arrangement = "DT"\nspacing_mm = 40')
     with pytest.raises(InvalidStateError) as e:
@@ -145,7 +145,7 @@ def test_set_with_a_loaded_contact_over_a_shoulder_is_refused_like_one_bearing(t
     shoulders = "[shoulders]\ninner_high_deg = 45\n"
     text = 'title = "db"\n' + SET.format(axial=20000, set='arrangement = "DB"\nspacing_mm = 40\n'
                                          'preload_class = "light"') + shoulders
-    from bearingsim.app.sets import solve_set_case
+    from bearingsim.app.set_workflows import solve_set_case
 
     sol = solve_set_case(parse_case(text, "db.toml"), throw=False)
     assert int(sol.result) == int(R.over_shoulder)
@@ -161,7 +161,7 @@ def test_set_with_a_loaded_contact_over_a_shoulder_is_refused_like_one_bearing(t
 def test_preload_above_the_static_capacity_warns(tmp_path, capsys):
     """A rigid preload of 1e6 N (p_max 5.4 GPa, C_0a of the 218 ~ 0.44 MN) used to pass silently:
     it warns as a single bearing over 4.2 GPa does, naming the static axial capacity."""
-    from bearingsim.app.sets import solve_set_case
+    from bearingsim.app.set_workflows import solve_set_case
 
     text = 'title = "p"\n' + SET.format(axial=2000, set='arrangement = "DB"\nspacing_mm = 40\npreload_N = 1e6')
     with pytest.warns(jones.OverloadWarning, match="static axial capacity C_0a"):

@@ -44,6 +44,8 @@ UNITS: dict[str, tuple[float, str, str]] = {
     "rev_s": (2.0 * math.pi, "Hz", "rad/s"),       # a rotation frequency (shaft, cage) in Hz
     "h": (3600.0, "h", "s"),
     "Mrev": (1e6, "10^6 rev", "rev"),
+    "N_per_um": (1e6, "N/um", "N/m"),              # stiffness in the JSON and the printouts
+    "Nm_per_mrad": (1e3, "N m/mrad", "N m/rad"),
 }
 
 

@@ -1,4 +1,4 @@
-"""A rigid shaft on N bearings (MODEL.md section 10): preloaded sets (DB, DF, DT, triplex,
+"""A rigid shaft on N bearings (docs/model.md section 10): preloaded sets (DB, DF, DT, triplex,
 quadruplex, ...), rigid and spring preload, two-support rotors.
 
 Model
@@ -6,7 +6,7 @@ Model
 The shaft carries every inner ring.  Its displacement q_s = [dx, dy, dz, theta_x, theta_y] is taken
 at the reference point O (z = 0 on the axis); the external loads F_s = [Fx, Fy, Fz, Mx, My] act
 there.  Bearing k (its own :class:`~bearingsim.physics.geometry.Bearing`, axial position z_k of its inner
-groove-centre plane, facing s_k = +1 / -1, preload) sees, in its own frame (MODEL.md 1 and 4
+groove-centre plane, facing s_k = +1 / -1, preload) sees, in its own frame (docs/model.md sections 1 and 4
 unchanged there):
 
     q_k = M_k T_k q_s + [0, 0, e_k - u_k, 0, 0]
@@ -16,7 +16,7 @@ unchanged there):
 and loads the shaft with T_k^T M_k R_k(q_k).  Equations: sum_k T_k^T M_k R_k = F_s (5), and for
 every spring-preloaded bearing R_k,z = P_k with its floating outer ring's axial shift u_k as one
 more unknown (u_k = 0 for the others).  A rigid preload is the offset e_k: the axial approach of
-bearing k alone under the thrust P_k at standstill (:func:`preload_offset`, MODEL.md 4 closed
+bearing k alone under the thrust P_k at standstill (:func:`preload_offset`, docs/model.md section 4 closed
 form at omega = 0), which with balanced preloads (sum_k s_k P_k = 0) puts the set in equilibrium
 at q_s = 0 with no external load; the offset is then held while speed and loads change.
 
@@ -39,6 +39,9 @@ frozen makes the state implicitly differentiable and gives the set stiffness
 dF_s/dq_s = sum_k T_k^T M_k K_k M_k T_k (with spring bearings the floating rings condensed out).
 Every bearing's converged state is re-checked by :func:`bearingsim.physics.jones.state_validity`, the
 shaft's equilibrium from the per-ball output.
+
+The preload closed forms live in :mod:`bearingsim.physics.preload`, the verdict on a failed set and
+its hints in :mod:`bearingsim.physics.set_verdict`; their names are offered here too.
 """
 from __future__ import annotations
 
@@ -53,11 +56,13 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
                     reactions_from_balls, static_ball_position)
 from .defect import as_defects, contact_depths
 from ..errors import InputError
-from .hertz import contact_ellipse, power_eval, stiffness_curve
-from .jones import (PRESSURE_WARNING, RESULTS, JonesSolution, OverloadWarning, initial_displacement, raise_for,
-                    state_validity)
+from .hertz import contact_ellipse, stiffness_curve
+from .jones import PRESSURE_WARNING, RESULTS, JonesSolution, initial_displacement, state_validity
 from .kinematics import Operation
 from .life import rating_life, set_life
+from .preload import (PRELOAD_CLASSES, STATIC_PRESSURE, preload_class_force, preload_offset, static_axial_capacity,
+                      thrust_at_approach)
+from .set_verdict import SET_NEWTON_HINT, raise_for_set, set_verdict, warn_set_overload
 from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, step_status,
                      traced_tolerances)
 from ..programs import jit
@@ -76,13 +81,16 @@ __all__ = [
     "solve_set",
     "solve_set_batch",
     "raise_for_set",
+    "set_verdict",
+    "SET_NEWTON_HINT",
+    "STATIC_PRESSURE",
     "PRELOAD_CLASSES",
     "static_axial_capacity",
     "preload_class_force",
     "set_lives",
 ]
 
-#: facings of the named arrangements, bearings in order of increasing z (MODEL.md 10):
+#: facings of the named arrangements, bearings in order of increasing z (docs/model.md section 10):
 #: B = a bearing carrying +Fz of the shaft (s = +1, "back" towards -z), F = the mirror
 #: (s = -1); tandem groups repeat a facing.  DB = "O", DF = "X", DT = tandem.
 ARRANGEMENTS = {
@@ -98,8 +106,6 @@ ARRANGEMENTS = {
     "QFT": (-1, -1, -1, 1),
     "QT": (1, 1, 1, 1),     # quadruplex tandem
 }
-
-_PRELOAD_NEWTON = 40
 
 
 def arrangement_facings(name: str) -> tuple:
@@ -124,7 +130,7 @@ def arrangement_suggestion(name: str):
 
 
 def frame_matrix(facing):
-    """M_k: diag(1, 1, 1, 1, 1) for s = +1, diag(1, -1, -1, 1, -1) for s = -1 (MODEL.md 10);
+    """M_k: diag(1, 1, 1, 1, 1) for s = +1, diag(1, -1, -1, 1, -1) for s = -1 (docs/model.md section 10);
     ``facing`` may be traced."""
     return jnp.diag(_frame_diag(facing))
 
@@ -136,7 +142,7 @@ def _frame_diag(facing):
 
 
 def transfer_matrix(z):
-    """T_k: the displacement of the shaft at axial position z from q_s at O (MODEL.md 10)."""
+    """T_k: the displacement of the shaft at axial position z from q_s at O (docs/model.md section 10)."""
     z = jnp.asarray(z, jnp.float64)
     T = jnp.eye(5, dtype=jnp.float64)
     return T.at[0, 4].set(z).at[1, 3].set(-z)
@@ -144,11 +150,11 @@ def transfer_matrix(z):
 
 # ----------------------------------------------------------------------------- the set
 class BearingSet(eqx.Module):
-    """N bearings on one rigid shaft (MODEL.md 10).
+    """N bearings on one rigid shaft (docs/model.md section 10).
 
     ``bearings``: one :class:`~bearingsim.physics.geometry.Bearing` per position (different ones allowed);
     ``positions``: z_k (m) of each inner groove-centre plane; ``facings`` (static): s_k = +1 (the
-    bearing of MODEL.md 1, carries +Fz of the shaft) or -1 (mirrored); ``preload`` (N): the
+    bearing of docs/model.md section 1, carries +Fz of the shaft) or -1 (mirrored); ``preload`` (N): the
     bearing's preload force P_k (N): for a rigid preload the thrust that fixes its offset e_k
     at standstill (0: a plain support), for a spring preload the constant force of its floating
     outer ring; ``springs``: True (1.0) for a spring-preloaded bearing.
@@ -203,7 +209,7 @@ class BearingSet(eqx.Module):
 
     def check_balance(self, rtol=1e-9):
         """Raise :class:`InputError` unless the preloads balance axially (sum_k s_k P_k = 0),
-        the condition for q_s = 0 at standstill with no external load (MODEL.md 10)."""
+        the condition for q_s = 0 at standstill with no external load (docs/model.md section 10)."""
         P = np.asarray(self.preload)
         net = float(np.dot(np.asarray(self.facings, float), P))
         if abs(net) > rtol * max(float(np.sum(np.abs(P))), 1.0):
@@ -214,94 +220,8 @@ class BearingSet(eqx.Module):
                 "opposed bearing that carries the same force")
 
 
-# --------------------------------------------------------------------- preload offsets
-def thrust_at_approach(bearing, approach, curve=None):
-    """The thrust (N) one bearing carries at axial approach ``approach`` (m) at omega = 0
-    (MODEL.md 4 closed form: Z K_n (L - BD)^1.5 sin alpha, K at the loaded contact angle)."""
-    curve = stiffness_curve(bearing) if curve is None else curve
-    BD = bearing.A
-    a0 = bearing.free_contact_angle
-    A1 = BD * jnp.sin(a0) + approach
-    A2 = BD * jnp.cos(a0)
-    L = jnp.sqrt(A1 * A1 + A2 * A2)
-    c, s = A2 / L, A1 / L
-    Ki, Ko = power_eval(curve.inner_power, c), power_eval(curve.outer_power, c)
-    Kn = (Ki ** (-2.0 / 3.0) + Ko ** (-2.0 / 3.0)) ** (-1.5)
-    dn = jnp.maximum(L - BD, 0.0)
-    return bearing.n_balls * Kn * dn * jnp.sqrt(dn) * s
-
-
-def preload_offset(bearing, preload, curve=None):
-    """The axial approach e (m) at which one bearing carries the thrust ``preload`` (N) at
-    omega = 0: the rigid-preload offset of MODEL.md 10 (0 for a preload <= 0)."""
-    curve = stiffness_curve(bearing) if curve is None else curve
-    P = jnp.maximum(jnp.asarray(preload, jnp.float64), 0.0)
-    P23 = jnp.cbrt(P) ** 2
-    start = initial_displacement(bearing, jnp.stack([0.0, 0.0, jnp.where(P > 0, P, 1.0), 0.0, 0.0]),
-                                 curve)[2]
-    BD = bearing.A
-    a0 = bearing.free_contact_angle
-    lo = jnp.sqrt(jnp.maximum(BD ** 2 - (BD * jnp.cos(a0)) ** 2, 0.0)) * 0.0 - BD * jnp.sin(a0)
-
-    def g(x):
-        return jnp.cbrt(thrust_at_approach(bearing, x, curve)) ** 2 - P23
-
-    def body(_, x):
-        v, d = jax.jvp(g, (x,), (jnp.ones_like(x),))
-        step = jnp.where(d > 0, v / jnp.where(d > 0, d, 1.0), 0.0)
-        xn = x - step
-        # stay where the balls touch (thrust > 0): halfway back towards the last point
-        return jnp.where(xn > lo, xn, 0.5 * (x + lo))
-
-    x = lax.fori_loop(0, _PRELOAD_NEWTON, body, start)
-    return jnp.where(P > 0, x, 0.0)
-
-
-#: preload classes as fractions of the static axial capacity C_0a (:func:`static_axial_capacity`):
-#: the 1 : 2 : 4 steps of the light / medium / heavy classes of spindle-bearing catalogues, scaled
-#: so that the Harris 218 (40 deg, C_0a = 436 kN in this model) gets 1.3 / 2.6 / 5.2 kN, the order
-#: of the catalogue classes of 40 deg bearings of that size (a project choice, not a standard)
-PRELOAD_CLASSES = {"light": 0.003, "medium": 0.006, "heavy": 0.012}
-#: ISO 76 static-capacity contact pressure of ball bearings (Pa)
-STATIC_PRESSURE = 4.2e9
-
-
-def static_axial_capacity(bearing, curve=None, pressure=STATIC_PRESSURE):
-    """C_0a (N): the thrust at which the peak contact pressure at omega = 0 reaches ``pressure``
-    (ISO 76: 4.2 GPa for ball bearings) in the MODEL.md 4 closed form (the larger of the inner
-    and outer contacts' p_max; bisection on the axial approach)."""
-    curve = stiffness_curve(bearing) if curve is None else curve
-    BD = bearing.A
-    a0 = bearing.free_contact_angle
-
-    def pmax(x):
-        F = thrust_at_approach(bearing, x, curve)
-        A1 = BD * jnp.sin(a0) + x
-        L = jnp.sqrt(A1 ** 2 + (BD * jnp.cos(a0)) ** 2)
-        s, c = A1 / L, BD * jnp.cos(a0) / L
-        Q = F / (bearing.n_balls * jnp.maximum(s, 1e-12))
-        return jnp.maximum(contact_ellipse(curve, c, Q, True)[2], contact_ellipse(curve, c, Q, False)[2])
-
-    def body(_, lohi):
-        lo, hi = lohi
-        mid = 0.5 * (lo + hi)
-        big = pmax(mid) > pressure
-        return jnp.where(big, lo, mid), jnp.where(big, mid, hi)
-
-    lo, hi = lax.fori_loop(0, 80, body, (jnp.float64(0.0), 0.02 * bearing.ball_diameter))
-    return thrust_at_approach(bearing, 0.5 * (lo + hi), curve)
-
-
-def preload_class_force(bearing, name: str):
-    """The preload (N) of a class "light" / "medium" / "heavy": :data:`PRELOAD_CLASSES` x C_0a."""
-    key = str(name).lower()
-    if key not in PRELOAD_CLASSES:
-        raise InputError(f"unknown preload class {name!r}; known: {', '.join(PRELOAD_CLASSES)}")
-    return float(PRELOAD_CLASSES[key] * static_axial_capacity(bearing))
-
-
 def set_lives(bset, sol, C, rows=1):
-    """ISO/TS 16281 basic reference rating lives (10^6 revolutions, MODEL.md 11; bearingsim.physics.life)
+    """ISO/TS 16281 basic reference rating lives (10^6 revolutions, docs/model.md section 11; bearingsim.physics.life)
     of every bearing of a solved set from its per-ball loads, and of the set (bearings fail
     independently): ``(L_k (..., N), L_set (...))``.  ``C``: basic dynamic load rating (N),
     scalar or (N,) (one per bearing)."""
@@ -641,6 +561,13 @@ class SetSolution(eqx.Module):
         """(..., N): the largest Hertz peak pressure of each bearing (Pa)."""
         return jnp.stack([b.max_pressure for b in self.bearings], axis=-1)
 
+    @property
+    def overloaded(self):
+        """(..., N) bool: a contact of the bearing above
+        :data:`~bearingsim.physics.jones.PRESSURE_WARNING` (4.2 GPa): solved and returned, flagged
+        (as ``JonesSolution.overloaded``), never refused."""
+        return self.max_pressure > PRESSURE_WARNING
+
     def shaft_reactions(self):
         """(..., N, 5): each bearing's loads on the shaft at O in the shaft frame, T^T M R."""
         out = []
@@ -869,24 +796,6 @@ def _static_start(sy: _System, bset: BearingSet, bks, curves, e, approach):
 _solve_jit = jit(solve_set_state)
 
 
-def raise_for_set(sol: SetSolution, what: str = "set solve"):
-    """Raise for the first failed item (see :func:`bearingsim.physics.jones.raise_for`: the set's
-    ``result``, its external loads), naming the bearing whose own check failed where one did and
-    the axial load it carries, with the hint for a bearing in a set."""
-    codes = np.ravel(np.asarray(sol.result))
-    bad = np.flatnonzero(codes != 0)
-    if not bad.size:
-        return
-    per = np.asarray(sol.bearing_result).reshape(codes.size, -1)
-    k = int(bad[0])
-    which = np.flatnonzero(per[k] != 0)
-    if which.size:
-        j = int(which[0])
-        Fk = float(np.ravel(np.asarray(sol.bearings[j].loads[..., 2]))[k])
-        what = f"{what} (bearing {j + 1} of {sol.n}, carrying {Fk:.6g} N axially in its contact direction)"
-    raise_for(sol, what, in_set=True)
-
-
 def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
               speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
               hertz_method: str = "exact", offsets=None, throw: bool = True) -> SetSolution:
@@ -903,32 +812,8 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
             sol = retry
     if throw:
         raise_for_set(sol)
-    _warn_set_overload(bset, sol)
+    warn_set_overload(bset, sol)
     return sol
-
-
-def _warn_set_overload(bset, sol):
-    """Warn (:class:`~bearingsim.physics.jones.OverloadWarning`, as a single bearing's solve does) when a
-    converged set has a contact above :data:`~bearingsim.physics.jones.PRESSURE_WARNING`, naming the
-    bearing, and its preload where that alone exceeds its static axial capacity C_0a."""
-    import warnings
-
-    if int(sol.result) != 0:
-        return
-    p = np.asarray(sol.max_pressure)
-    for k in np.flatnonzero(p > PRESSURE_WARNING):
-        k = int(k)
-        P = float(np.asarray(sol.preload)[k])
-        extra = ""
-        if P > 0.0:
-            C0a = float(static_axial_capacity(bset.bearings[k]))
-            if P > C0a:
-                extra = (f"; its preload {P:.6g} N is above its static axial capacity C_0a = {C0a:.6g} N "
-                         "(the thrust that alone gives 4.2 GPa at standstill): lower the preload")
-        warnings.warn(f"bearing {k + 1} of {sol.n}: contact pressure {p[k] / 1e9:.2f} GPa exceeds "
-                      f"{PRESSURE_WARNING / 1e9:.1f} GPa (ISO 76 static-capacity stress): the steel deforms "
-                      f"permanently; the Hertz result is an elastic idealisation{extra}", OverloadWarning,
-                      stacklevel=3)
 
 
 def _solve_batch(bset, op, loads, cage_angle, spalls, preload, facings, positions, springs,
