@@ -80,15 +80,16 @@ centrifugal = true
 gyroscopic = true
 cage_angle_deg = 0.0                     # azimuth of ball 0 (static solve)
 hertz = "exact"                          # or "brewe-hamrock"
+tilt = "free"                            # or "held": the ring's tilt held at 0 (bearingsim static)
 
-[load]                                   # on the inner ring, MODEL.md frame
+[load]                                   # on the inner ring, docs/model.md frame
 axial_N = 10000
 radial_x_N = 3000                        # +x: the load zone is centred at azimuth 0
 radial_y_N = 0
 moment_x_Nm = 0
 moment_y_Nm = 0
 
-# [set]                                  # a shaft on several bearings (MODEL.md 10); omit for one
+# [set]                                  # a shaft on several bearings (docs/model.md section 10); omit for one
 # arrangement = "DB"                     # exactly one of these two: a named arrangement (DB, DF,
 # facings = [1, -1]                      #   DT, TBT, QBC, ...) or each bearing's facing +1 / -1
 # spacing_mm = 40                        # arrangement: distance between neighbours

@@ -79,6 +79,12 @@ CATALOGUE = {
     "negative speed": ("static", edit(GOOD, "speed_rpm = 1797", "speed_rpm = -5"), ["operation.speed_rpm"]),
     "choice typo": ("static", edit(GOOD, "[operation]", '[operation]\nraceway_control = "outr"'),
                     ["operation.raceway_control", 'did you mean "outer"']),
+    "tilt typo": ("static", edit(GOOD, "[operation]", '[operation]\ntilt = "hold"'),
+                  ["operation.tilt", 'did you mean "held"']),
+    "held tilt with a moment": ("static", edit(GOOD, "[load]", '[load]\nmoment_y_Nm = 5').replace(
+        "[operation]", '[operation]\ntilt = "held"'), ["load.moment_y_Nm = 5", 'operation.tilt = "held"']),
+    "held tilt swept": ("sweep", edit(GOOD, "[operation]", '[operation]\ntilt = "held"'),
+                        ['operation.tilt = "held" is not supported by the cage-angle sweep']),
     "missing key": ("static", edit(GOOD, "pitch_diameter_mm = 39.0398\n", ""),
                     ["missing required key bearing.pitch_diameter_mm"]),
     "missing section": ("static", edit(GOOD, "[operation]\nspeed_rpm = 1797\n", ""),

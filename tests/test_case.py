@@ -117,7 +117,7 @@ def test_defaults_filled_in():
     assert d["material"] == {"youngs_modulus_GPa": 207.5, "poisson_ratio": 0.3, "density_kg_m3": 7850.0}
     assert "ball" not in d["material"]
     assert d["operation"] == {"speed_rpm": 10000.0, "raceway_control": "outer", "centrifugal": True,
-                              "gyroscopic": True, "cage_angle_deg": 0.0, "hertz": "exact"}
+                              "gyroscopic": True, "cage_angle_deg": 0.0, "hertz": "exact", "tilt": "free"}
     assert d["load"] == {"axial_N": 0.0, "radial_x_N": 0.0, "radial_y_N": 0.0,
                          "moment_x_Nm": 0.0, "moment_y_Nm": 0.0}
     assert d["sweep"] == {"start_deg": 0.0, "stop_deg": 22.5, "steps": 181}
@@ -764,7 +764,7 @@ def test_unit_table_round_trips_and_covers_every_key():
 
 
 # ----------------------------------------------------------------------------------------------
-# inner-raceway spall and ball pit (MODEL.md section 9)
+# inner-raceway spall and ball pit (docs/model.md section 9)
 # ----------------------------------------------------------------------------------------------
 def test_inner_spall_from_length():
     c = parse_case(MINIMAL + '[defect]\nlocation = "inner"\ncenter_deg = 90\nlength_mm = 2.0\n'
@@ -840,7 +840,7 @@ def test_cwru_inner_and_ball_cases():
 
 
 # ---------------------------------------------------------------------------------------------
-# [set]: a shaft on several bearings (MODEL.md 10)
+# [set]: a shaft on several bearings (docs/model.md section 10)
 # ---------------------------------------------------------------------------------------------
 def _set_case(set_text, extra=""):
     base = (CASES_DIR / "harris218_db_light.toml").read_text()

@@ -242,7 +242,7 @@ def bearing_stiffness(case_or_set, speeds_rpm, *, throw=True) -> BearingStiffnes
                               hertz_method=case.hertz_method)
     else:
         sol = solve_batch(case.bearing(), op, loads, cage_angle=case.cage_angle, spall=case.spall(),
-                          hertz_method=case.hertz_method)
+                          hertz_method=case.hertz_method, tilt=case.get("operation.tilt") or "free")
     sol = jax.tree_util.tree_map(lambda a: a[:M], sol)
     bad = np.flatnonzero(np.asarray(sol.result) != 0)
     if throw and bad.size:

@@ -219,7 +219,7 @@ SCHEMA: dict[str, Section] = {
         required=True,
     ),
     "bearing": Section(
-        "Geometry of the bearing (MODEL.md section 2).",
+        "Geometry of the bearing (docs/model.md section 2).",
         dict(_BEARING_KEYS),
         required=True,
         exactly_one=(("free_contact_angle_deg", "diametral_clearance_mm"),),
@@ -245,7 +245,7 @@ SCHEMA: dict[str, Section] = {
         fill_defaults=False,
     ),
     "limits": Section(
-        "Limits reported per contact by `bearingsim static` (MODEL.md section 11).",
+        "Limits reported per contact by `bearingsim static` (docs/model.md section 11).",
         {
             "contact_pressure_limit_MPa": _num("peak Hertz pressure limit (ISO 76 static capacity of ball "
                                                "bearings: 4200 MPa)", "MPa", 4200.0, gt=0),
@@ -267,7 +267,7 @@ SCHEMA: dict[str, Section] = {
         fill_defaults=False,
     ),
     "operation": Section(
-        "Operating condition: inner ring turning, outer ring fixed (MODEL.md sections 1 and 4).",
+        "Operating condition: inner ring turning, outer ring fixed (docs/model.md sections 1 and 4).",
         {
             "speed_rpm": _num("inner-ring speed n", "rpm", ge=0),
             "raceway_control": _enum("raceway control hypothesis for the ball kinematics",
@@ -277,11 +277,21 @@ SCHEMA: dict[str, Section] = {
             "cage_angle_deg": _num("cage angle theta_c: azimuth of ball 0, from +x towards +y", "deg", 0.0),
             "hertz": _enum("Hertz ellipticity and elliptic integrals: exact, or the Brewe-Hamrock "
                            "approximation", ("exact", "brewe-hamrock"), "exact"),
+            "tilt": _enum("the inner ring's tilt: \"free\" (force-controlled: the moments of [load] act, "
+                          "the tilts are solved; with no moment a radial load tilts the ring) or \"held\" "
+                          "(a displacement-controlled tilt of zero, the usual spindle assumption: the "
+                          "translations are solved under the forces and the moments that hold the ring "
+                          "square are reported)", ("free", "held"), "free"),
         },
         required=True,
+        notes=(
+            "tilt = \"held\": the moments of [load] must be 0 (they are the result) and the case has no "
+            "[set] (a set's shaft tilt is solved from its bearings); `bearingsim static`, `bearingsim rotor` "
+            "and the Python API solve it, `sweep`, `study`, `simulate`, `compare` and `dataset` refuse it",
+        ),
     ),
     "load": Section(
-        "Loads applied to the inner ring in the MODEL.md section 1 frame (z axial, +Fz loads the "
+        "Loads applied to the inner ring in the docs/model.md section 1 frame (z axial, +Fz loads the "
         "bearing in its contact direction; +Fx makes the ball at azimuth 0 the most loaded).",
         {
             "axial_N": _num("axial force Fz", "N", 0.0),
@@ -292,7 +302,7 @@ SCHEMA: dict[str, Section] = {
         },
     ),
     "defect": Section(
-        "Optional localized defect (MODEL.md sections 5 and 9): a spall on the outer raceway "
+        "Optional localized defect (docs/model.md sections 5 and 9): a spall on the outer raceway "
         "(default), a spall on the inner raceway, or a pit on one ball.  Absent: healthy bearing.",
         {
             "location": _enum("where the defect is: outer raceway, inner raceway (turns with the inner "
@@ -328,10 +338,10 @@ SCHEMA: dict[str, Section] = {
         ),
     ),
     "set": Section(
-        "Optional: a rigid shaft on several bearings (MODEL.md section 10).  [bearing] is every "
+        "Optional: a rigid shaft on several bearings (docs/model.md section 10).  [bearing] is every "
         "bearing of the set (unless [set.second_bearing]); [load] acts on the shaft at z = 0 in the "
         "shaft frame; bearing k (k = 1..N by increasing position) faces +1 (carries +Fz, the bearing "
-        "of MODEL.md 1) or -1 (mirrored).  Either an arrangement name with a spacing, or explicit "
+        "of docs/model.md section 1) or -1 (mirrored).  Either an arrangement name with a spacing, or explicit "
         "facings and positions.",
         {
             "arrangement": _str("named arrangement, bearings by increasing z: DB (back to back, "
@@ -378,7 +388,7 @@ SCHEMA: dict[str, Section] = {
         exactly_one=(("free_contact_angle_deg", "diametral_clearance_mm"),),
     ),
     "sweep": Section(
-        "Cage-angle sweep (MODEL.md section 6).",
+        "Cage-angle sweep (docs/model.md section 6).",
         {
             "start_deg": _num("first cage angle", "deg", 0.0),
             "stop_deg": Key("float", "last cage angle", "deg", _default_sweep_stop,
@@ -399,7 +409,7 @@ SCHEMA: dict[str, Section] = {
                "(or one that has defaults)",),
     ),
     "dynamics": Section(
-        "Settings of the dynamic simulation (MODEL.md section 7).",
+        "Settings of the dynamic simulation (docs/model.md section 7).",
         {
             "duration_s": _num("simulated time", "s", 1.0, gt=0),
             "sample_rate_Hz": _num("output sample rate of the signals", "Hz", 48000.0, gt=0),

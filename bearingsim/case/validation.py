@@ -307,6 +307,17 @@ def _cross_checks(data: dict, problems: list[str], raw: dict | None = None) -> N
         problems.append(f"sweep.stop_deg = {shown('sweep', 'stop_deg')} must differ from "
                         f"sweep.start_deg = {shown('sweep', 'start_deg')}")
 
+    if data.get("operation", {}).get("tilt") == "held":
+        ld = data.get("load", {})
+        for key in ("moment_x_Nm", "moment_y_Nm"):
+            if ld.get(key, 0.0) != 0.0:
+                problems.append(f"load.{key} = {shown('load', key)} with operation.tilt = \"held\": a held tilt "
+                                "takes no applied moment (the moments that hold it are the result); set it to 0, "
+                                "or operation.tilt = \"free\" to apply it")
+        if "set" in data:
+            problems.append("operation.tilt = \"held\" applies to a single bearing: a [set]'s shaft tilt is "
+                            "solved from its bearings; remove the key or set it to \"free\"")
+
     dyn = data.get("dynamics", {})
     for path in ("dynamics", "dataset"):
         sec = data.get(path)

@@ -1,11 +1,11 @@
-"""Jones (1960) quasi-static model in Harris' form with raceway defects (MODEL.md sections 3-5):
+"""Jones (1960) quasi-static model in Harris' form with raceway defects (docs/model.md sections 3-5):
 one flat Newton on all 2Z + 5 unknowns.
 
 Design
 ------
 * Unknowns: the ring displacement q (5) and every ball centre (X1, X2) (Z x 2), plus, when a
   defect is present, every ball's undropped centre (its orbital speed is the one the cage
-  carries a ball at when it loses inner contact over the defect, MODEL.md 5).
+  carries a ball at when it loses inner contact over the defect, docs/model.md section 5).
 * One Newton iteration evaluates every ball's residuals and loads on the ring together with
   their Jacobian with respect to (X1, X2, A1, A2) (``jax.jacfwd`` of one ball's equations from
   :mod:`bearingsim.physics.balls`, vmapped over balls), eliminates the 2x2 ball blocks (Schur complement
@@ -30,6 +30,15 @@ Design
   the Python API and the command line give the same verdict.  Contact pressures above 4.2 GPa
   are a warning (ISO 76 static-capacity stress: permanent deformation ~1e-4 D starts there).
 
+* Tilt ``free`` or ``held`` (a static setting, one program each): ``free`` (the default) solves
+  all 5 ring DOF under the applied [Fx, Fy, Fz, Mx, My] (a force-controlled inner ring: with no
+  moment a radial load tilts it); ``held`` fixes the tilts at zero (displacement control, the
+  usual spindle assumption: the shaft holds the ring square), solves the 3 translations under
+  [Fx, Fy, Fz] -- the same Newton with the tilt unknowns and the moment equations left out (the
+  3x3 translational block of the Schur complement) -- and reports in ``loads[3:5]`` the moments
+  that hold the tilt (the moment sum of the contact forces about the ring centre).  The state is
+  then a free state under those moments, so the same validity rule judges it.
+
 Unknowns are scaled to micrometres (tilts as micrometres at the groove-centre radius R_i),
 residuals to kN (moments divided by R_i), so one tolerance fits every DOF.
 """
@@ -47,7 +56,7 @@ from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, gro
                     inverse2, lift_onto_outer, offset_jacobian, orbital_speed, reaction_matrix,
                     reactions_from_balls, static_ball_position)
 from .defect import Spall, canonical_defects, contact_depths
-from ..errors import InvalidStateError, NotConvergedError, ResultCode
+from ..errors import InputError, InputTypeError, InvalidStateError, NotConvergedError, ResultCode
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed,
@@ -74,6 +83,8 @@ __all__ = [
     "DEFORMATION_LIMIT",
     "PRESSURE_WARNING",
     "GROOVE_BOTTOM_ANGLE",
+    "TILT_MODES",
+    "tilt_held",
 ]
 
 #: largest contact deformation a valid state may hold, as a fraction of the ball diameter D.
@@ -84,6 +95,10 @@ DEFORMATION_LIMIT = 0.01
 #: ISO 76 basic static load rating stress of ball bearings, where permanent deformation of
 #: ~1e-4 D begins.
 PRESSURE_WARNING = 4.2e9
+#: how the inner ring's tilt is treated (a static setting): "free" (force-controlled: the applied
+#: moments Mx, My, tilts solved) or "held" (displacement-controlled tilt of zero: translations
+#: solved under Fx, Fy, Fz, the holding moments reported in ``JonesSolution.loads[3:5]``)
+TILT_MODES = ("free", "held")
 
 
 class RESULTS(ResultCode):
@@ -98,7 +113,7 @@ class RESULTS(ResultCode):
                  "a single-row angular contact bearing needs axial load in its contact direction "
                  "to carry radial load and moments; check the loads, or lower the speed")
     inverted_contact = (4, "a loaded contact has its normal pointing out of its raceway "
-                        "(|alpha| >= 90 deg, MODEL.md section 3): a spurious root",
+                        "(|alpha| >= 90 deg, docs/model.md section 3): a spurious root",
                         "the loads cannot be carried with every contact pressing into its raceway; "
                         "check the load directions and the defect depth")
     equilibrium = (5, "a ball or the ring is not in equilibrium when recomputed from the "
@@ -137,6 +152,27 @@ class OverloadWarning(UserWarning):
     """Contact pressure above :data:`PRESSURE_WARNING`: valid for the model, not for the steel."""
 
 
+def tilt_held(tilt) -> bool:
+    """Whether ``tilt`` (one of :data:`TILT_MODES`) holds the ring's tilt at zero; anything else
+    is an :class:`~bearingsim.errors.InputError` naming the allowed values."""
+    if not isinstance(tilt, str) or tilt not in TILT_MODES:
+        cls = InputError if isinstance(tilt, str) else InputTypeError
+        raise cls(f"tilt = {tilt!r} is not a tilt mode: must be one of " + ", ".join(repr(t) for t in TILT_MODES),
+                  "\"free\": the applied moments act and the tilts are solved (a force-controlled inner "
+                  "ring); \"held\": the tilts are held at zero (a shaft that keeps the ring square) and the "
+                  "moments that hold them are reported")
+    return tilt == "held"
+
+
+def _check_held_loads(loads, tilt):
+    """A held tilt takes no applied moment (the moments are its outputs): refuse one."""
+    if tilt_held(tilt) and np.any(np.asarray(loads)[..., 3:5] != 0.0):
+        raise InputError("loads Mx, My must be 0 with tilt = 'held' (got "
+                         f"{np.asarray(loads)[..., 3:5].tolist()} N m): a held tilt is displacement-"
+                         "controlled, the moments are its result (JonesSolution.loads[3:5])",
+                         "give Mx = My = 0 with tilt = 'held', or use tilt = 'free' to apply moments")
+
+
 def _scales(bearing):
     Ri = bearing.inner_groove_radius
     qs = jnp.stack([UM, UM, UM, UM / Ri, UM / Ri])
@@ -164,7 +200,7 @@ def initial_displacement(bearing, loads, curve):
 
 def _defect_depths(bearing, spall, psi):
     """(H_outer, H_inner) under each ball, or (None, None) when healthy: ``spall`` is None, a
-    :class:`Spall` (outer, inner or ball, MODEL.md 5 and 9) or a tuple of them."""
+    :class:`Spall` (outer, inner or ball, docs/model.md sections 5 and 9) or a tuple of them."""
     return contact_depths(bearing, spall, psi)
 
 
@@ -182,6 +218,7 @@ class _Problem(eqx.Module):
     qs: jnp.ndarray
     rs: jnp.ndarray
     defect: bool = eqx.field(static=True)
+    held: bool = eqx.field(static=True, default=False)
 
 
 def _per_ball(pb: _Problem, Y, a, ho, hi, ws, jac):
@@ -227,6 +264,8 @@ def _evaluate(pb: _Problem, qz, Y, Yu, jac=True):
             Y, a, pb.H_outer, pb.H_inner)
     T = reaction_matrix(pb.psi)                                   # (Z, 5, 3)
     piece["rq"] = jnp.einsum("zij,zj->i", T, out[:, 2:]) - pb.Fn
+    if pb.held:         # the moment equations are not equations of a held tilt: its moments are free
+        piece["rq"] = jnp.concatenate([piece["rq"][:3], jnp.zeros(2)])
     piece["rb"] = out[:, :2]
     if jac:
         piece.update(Jbb=J[:, :2, :2], Jba=J[:, :2, 2:], Cx=J[:, 2:, :2], Ca=J[:, 2:, 2:])
@@ -263,7 +302,10 @@ def _direction(pb: _Problem, piece, jac=None):
     S = jnp.einsum("zij,zjk,zkl->il", T, Ca - M @ Jba, P)         # (5, 5) scaled dR/dq
     rhs = piece["rq"] - jnp.einsum("zij,zjk,zk->i", T, M, piece["rb"])
     mu = 1e-13 * (jnp.max(jnp.abs(S)) + 1e-30)
-    dq = -jnp.linalg.solve(S + mu * jnp.eye(5), rhs)
+    if pb.held:         # the 3 translations only (the translational block); the tilts stay at 0
+        dq = jnp.concatenate([-jnp.linalg.solve(S[:3, :3] + mu * jnp.eye(3), rhs[:3]), jnp.zeros(2)])
+    else:
+        dq = -jnp.linalg.solve(S + mu * jnp.eye(5), rhs)
     dA = jnp.einsum("zij,j->zi", P, dq)
     dY = -jnp.einsum("zij,zj->zi", inv, piece["rb"] + jnp.einsum("zij,zj->zi", Jba, dA))
     dYu = None
@@ -344,6 +386,10 @@ class JonesSolution(eqx.Module):
     max-norm of the equilibrium residual in N (moments divided by R_i), balls included.
     ``stiffness`` is dR/dq (5, 5): rows the loads [Fx, Fy, Fz, Mx, My], columns the ring
     displacements [x, y, axial, tilt_x, tilt_y] (N/m, N/rad, N m/m, N m/rad).
+    ``tilt`` (static): "free" (``loads`` as applied, tilts solved) or "held" (tilts 0;
+    ``loads[3:5]`` are the moments that hold them, the moment sum of the contact forces about the
+    ring centre; the translational 3x3 block ``stiffness[:3, :3]`` is the stiffness of the held
+    ring, the full 5x5 the tangent of the 5-DOF bearing at that state).
     """
 
     displacement: jnp.ndarray       # q = [dx, dy, dz, theta_x, theta_y]
@@ -379,6 +425,7 @@ class JonesSolution(eqx.Module):
     ball_position: jnp.ndarray      # (Z, 2) ball centres (X1, X2) from the outer groove centre (m)
     undropped_position: jnp.ndarray  # (Z, 2) the same without the defect (warm starts)
     spall_depth_inner: jnp.ndarray  # H_inner: defect depth at each ball's inner contact (m)
+    tilt: str = eqx.field(static=True, default="free")  # TILT_MODES: "held": loads[3:5] hold it at 0
 
     @property
     def converged(self):
@@ -407,7 +454,7 @@ class JonesSolution(eqx.Module):
 
 
 def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
-    """Result code of a converged state, re-checked from its per-ball output (MODEL.md 3-4)."""
+    """Result code of a converged state, re-checked from its per-ball output (docs/model.md sections 3-4)."""
     D = bearing.ball_diameter
     lam_i, lam_o = op.factors
     si, ci = jnp.sin(st.alpha_inner), jnp.cos(st.alpha_inner)
@@ -429,10 +476,10 @@ def _validity(bearing, op, st: BallState, psi, q, F, H_total, rtol):
     ball_bad = jnp.max(jnp.maximum(jnp.abs(r1), jnp.abs(r2))) > tol
     ring_bad = jnp.max(jnp.abs((R - F) * w)) > tol
     inverted = jnp.any(((st.Q_inner > 0.0) & (ci <= 0.0)) | ((st.Q_outer > 0.0) & (co <= 0.0)))
-    # the groove edges (MODEL.md 11, the rule of bearingsim.physics.limits.contact_limits): a loaded
+    # the groove edges (docs/model.md section 11, the rule of bearingsim.physics.limits.contact_limits): a loaded
     # contact centred at or beyond an edge has the ball riding on the shoulder, outside the model.
     # A ball over a defect (defect depth under it > 0) is exempt: its contact angles jump as it
-    # drops into the spall or pit (the seed paper's subject, MODEL.md 5), the groove it runs in
+    # drops into the spall or pit (the seed paper's subject, docs/model.md section 5), the groove it runs in
     # there is the defect's, and a lightly loaded contact of that ball (~10 N at 79 deg for a
     # 0.3 mm spall in the 218 at 10 krpm) is what the defective Jones model predicts; the limits
     # still flag it (ContactLimits.over_shoulder).  Every other ball follows the rule.
@@ -508,14 +555,20 @@ def _load_cause(bearing, op, F, st, code, settled=True):
 
 def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,
                 q0=None, x0=None, xu0=None, speed_steps: int = 1, maxit=60, rtol=1e-11, atol=1e-9,
-                hertz_method: str = "exact", curve=None) -> JonesSolution:
-    """The quasi-static state as a pure JAX function (jit/vmap/grad; never raises).
+                hertz_method: str = "exact", curve=None, tilt: str = "free") -> JonesSolution:
+    """The quasi-static state as a pure JAX function (jit/vmap/grad; never raises, except an
+    InputError for a ``tilt`` outside :data:`TILT_MODES` when it is traced).
 
     Cold start (``q0=None``): the rigid-ring static solution (omega = 0) from an axial shift,
     then the operating speed in ``speed_steps`` stages.  Warm start: ``q0`` (and optionally the
     ball centres ``x0`` and undropped centres ``xu0``, (Z, 2) m) at the full speed.
+    ``tilt``: "free" (the moments loads[3:5] applied, tilts solved) or "held" (tilts 0, the
+    moments of ``loads`` ignored; the returned ``loads[3:5]`` are the moments that hold the tilt).
     """
+    held = tilt_held(tilt)
     F = jnp.asarray(loads, dtype=jnp.float64)
+    if held:
+        F = jnp.concatenate([F[:3], jnp.zeros(2)])
     cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
     curve = stiffness_curve(bearing, hertz_method) if curve is None else curve
     qs, rs = _scales(bearing)
@@ -529,7 +582,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
 
     def problem(frac):
         o = eqx.tree_at(lambda p: p.speed, op, op.speed * frac)
-        return _Problem(bearing, o, curve, psi, Ho, Hi, Fn, qs, rs, defect)
+        return _Problem(bearing, o, curve, psi, Ho, Hi, Fn, qs, rs, defect, held)
 
     if q0 is None:
         qz = initial_displacement(bearing, F, curve) / qs
@@ -537,6 +590,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
         Y = Yu = None
     else:
         qz = jnp.asarray(q0, jnp.float64) / qs
+        qz = jnp.concatenate([qz[:3], jnp.zeros(2)]) if held else qz
         fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
         Y = None if x0 is None else jnp.asarray(x0, jnp.float64) / UM
         Yu = None if xu0 is None else jnp.asarray(xu0, jnp.float64) / UM
@@ -588,13 +642,18 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
                   in_axes=(0, 0, 0, 0, 0, None if ws is None else 0))(x, A1, A2, Ho, Hi, ws)
     a_i, b_i, p_i = contact_ellipse(curve, jnp.cos(st.alpha_inner), st.Q_inner, True)
     a_o, b_o, p_o = contact_ellipse(curve, jnp.cos(st.alpha_outer), st.Q_outer, False)
+    F_in = F
+    if held:            # the moments that hold the tilt: the balls' moment sum about the ring centre
+        F = jnp.concatenate([F[:3], reactions_from_balls(st, psi)[3:]])
     valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
-    code = _load_cause(bearing, op, F, st, jnp.where(code == 0, valid, code), code == 0).astype(jnp.int32)
+    code = _load_cause(bearing, op, F_in, st, jnp.where(code == 0, valid, code), code == 0).astype(jnp.int32)
+    if held:            # a refused state holds nothing: its loads are the applied ones (moments 0)
+        F = jnp.where(code == 0, F, F_in)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
                          st.ball_G, st.ball_H, st.ball_moment, st.K_inner, st.K_outer, p_i, p_o,
-                         a_i, b_i, a_o, b_o, K, x, Yu * UM, Hi)
+                         a_i, b_i, a_o, b_o, K, x, Yu * UM, Hi, tilt)
 
 
 def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | tuple | None = None, hertz_method="exact",
@@ -702,7 +761,7 @@ def _warn_overload(sol):
 
 def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None, q0=None,
           speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
-          hertz_method: str = "exact", throw: bool = True) -> JonesSolution:
+          hertz_method: str = "exact", throw: bool = True, tilt: str = "free") -> JonesSolution:
     """Solve the Jones model for one load case.
 
     ``loads`` = [Fx, Fy, Fz, Mx, My] (N, N m) on the inner ring (see :func:`load_vector`).
@@ -711,14 +770,17 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     the hot path).  ``throw=True`` raises :class:`NotConvergedError` or
     :class:`InvalidStateError` with the reason and a hint; pressures above 4.2 GPa warn
     (:class:`OverloadWarning`).  ``spall``: None (healthy), a :class:`Spall` on the outer or
-    inner raceway or a pit on one ball (MODEL.md 5 and 9), or a tuple of them (several defects).
+    inner raceway or a pit on one ball (docs/model.md sections 5 and 9), or a tuple of them (several defects).
+    ``tilt``: "free" (default: the moments Mx, My applied, the tilts solved) or "held" (the tilts
+    held at 0, Mx = My = 0 required; ``sol.loads[3:5]`` are the moments that hold them).
     """
+    _check_held_loads(loads, tilt)
     loads = jnp.asarray(loads, dtype=jnp.float64)
     cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
     q0 = None if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     kw = dict(cage_angle=cage_angle, spall=canonical_defects(spall), maxit=maxit, rtol=rtol, atol=atol,
-              hertz_method=hertz_method)
+              hertz_method=hertz_method, tilt=tilt)
     sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
     if int(sol.result) != 0 and (speed_steps < 8 or q0 is not None):
         retry = _solve_jit(bearing, op, loads, speed_steps=8, **kw)
@@ -730,12 +792,14 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     return sol
 
 
-def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol, atol, hertz_method):
+def _solve_batch(bearing, op, loads, cage_angle, spall, speed_steps, maxit, rtol, atol, hertz_method,
+                 tilt="free"):
     curve = stiffness_curve(bearing, hertz_method)
 
     def one(o, F, c):
         return solve_state(bearing, o, F, cage_angle=c, spall=spall, speed_steps=speed_steps,
-                           maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, curve=curve)
+                           maxit=maxit, rtol=rtol, atol=atol, hertz_method=hertz_method, curve=curve,
+                           tilt=tilt)
 
     return jax.vmap(one)(op, loads, cage_angle)
 
@@ -745,13 +809,15 @@ _solve_batch_jit = jit(_solve_batch)
 
 def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple | None = None,
                 speed_steps: int = 1, maxit: int = 60, rtol: float = 1e-11, atol: float = 1e-9,
-                hertz_method: str = "exact", throw: bool = False) -> JonesSolution:
+                hertz_method: str = "exact", throw: bool = False, tilt: str = "free") -> JonesSolution:
     """vmapped solve over N load cases ``loads`` (N, 5); ``op.speed`` and ``cage_angle`` may be
     (N,) or scalar.  Items that fail are retried once with 8 speed steps (only those).
+    ``tilt``: "free" or "held", for every item (as :func:`solve`).
 
     ``throw=False`` (default): check ``solution.result`` per item (0 = converged and valid);
     ``throw=True`` raises for the first failed item, naming how many failed.
     """
+    _check_held_loads(loads, tilt)
     loads = jnp.asarray(loads, dtype=jnp.float64)
     n = loads.shape[0]
     op_b = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op,
@@ -761,13 +827,13 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     spall = canonical_defects(spall)
     sol = _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,
-                           hertz_method)
+                           hertz_method, tilt)
     if speed_steps < 8:
         def run(idx):   # the failed items again with 8 speed steps (only them)
             op_r = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op_b,
                                (op_b.speed[idx], op_b.centrifugal[idx], op_b.gyroscopic[idx]))
             return _solve_batch_jit(bearing, op_r, loads[idx], cage[idx], spall, 8, maxit, rtol, atol,
-                                    hertz_method)
+                                    hertz_method, tilt)
 
         sol = retry_failed(sol, run, better)
     if throw:
@@ -778,7 +844,7 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
 # ----------------------------------------------------------- entry points for other solvers
 def state_validity(bearing, op: Operation, balls: BallState, psi, q, loads, defect_depth, rtol):
     """Result code (:class:`RESULTS`) of a converged state re-checked from its per-ball output
-    (MODEL.md 3-4): finite, no inverted loaded contact, every ball and the ring in equilibrium
+    (docs/model.md sections 3-4): finite, no inverted loaded contact, every ball and the ring in equilibrium
     with ``loads``, deformations and ring displacement within bounds.  ``defect_depth``: the
     total defect depth under each ball (H_outer + H_inner, (Z,)).  The checks of
     :func:`solve_state`, for solvers that hold the balls themselves (:mod:`bearingsim.physics.shaft`)."""
