@@ -5,8 +5,8 @@ The folders show the flow (docs/architecture.md): ``physics`` (geometry -> hertz
 signal stage, envelope analysis) form the core, pure JAX in float64, knowing nothing of files or
 printing; ``case`` (case files), ``output`` (results files, reports, figures), ``datasets`` (data
 sets, their reader, scale-out), ``realism`` (real records: calibration, transfer, identification)
-and ``app`` (workflows, sets, the command line) are the edge.  Old flat paths
-(``bearingsim.jones``) still import, with a DeprecationWarning (:mod:`bearingsim.moved`).
+and ``app`` (workflows, sets, the command line) are the edge.  The flat paths before the folders
+(``bearingsim.jones``) are gone (issue 35; they warned since the folders came): import from the folders.
 
 The nouns a user types are here, imported at first use: ``bearingsim.solve``, ``solve_set``,
 ``sweep``, ``simulate``, ``load_case``, ``solve_case``, ``make_dataset``, ``load_dataset``,
@@ -34,10 +34,7 @@ from . import runtime as _runtime  # noqa: E402
 _runtime.configure()        # float64 and the persistent compilation cache, before JAX loads
 
 from ._version import __version__  # noqa: E402
-from . import moved as _moved  # noqa: E402
 from .names import lazy_exports as _lazy_exports  # noqa: E402
-
-_moved.install()            # the paths before the folders (bearingsim.jones, ...), deprecated
 
 #: the names a user types, and the module each comes from: imported at first use (PEP 562), so
 #: that ``import bearingsim`` and ``bearingsim --help`` do not load JAX.  The edge's nouns
@@ -59,23 +56,15 @@ _EXPORTS = {
     "physics.limits": ("contact_limits",),
     "dynamics": ("simulate", "DynamicsParameters", "DynamicsResult"),
     "case": ("load_case", "Case"),
-    "app.workflows": ("solve_case", "sweep_case", "study_case", "simulate_case"),
+    "app.workflows": ("solve_case", "sweep_case", "study_case"),
+    "app.signal_workflows": ("simulate_case",),
     "datasets.runner": ("make_dataset",),
     "datasets.mldata": ("load_dataset", "WindowDataset"),
     "realism.identify": ("identify",),
 }
 
 
-def _moved_module(name):
-    """``bearingsim.jones`` and the other paths before the folders: deprecated (bearingsim.moved)."""
-    if _moved.new_path(f"{__name__}.{name}") is None:
-        raise AttributeError(f"module 'bearingsim' has no attribute {name!r}")
-    import importlib
-
-    return importlib.import_module(f".{name}", __name__)
-
-
-__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS, _moved_module)
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)
 
 
 __all__ = [

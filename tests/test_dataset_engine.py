@@ -9,6 +9,7 @@ import pytest
 
 import bearingsim.datasets as dsm
 from bearingsim.datasets import draw_labels, item_keys, make_dataset
+from bearingsim.datasets.progress import PHASES
 from bearingsim.errors import InputError
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -39,7 +40,9 @@ def chunked(tmp_path_factory):
         out = {}
         for name, chunk in (("c16", 16), ("c64", 64), ("c64b", 64)):
             n0 = len(calls)
-            out[name] = (make_dataset(spec20(), d / f"{name}.h5", progress=False, chunk=chunk), calls[n0:])
+            events = []                                 # the progress events (test_make_dataset_reports_...)
+            out[name] = (make_dataset(spec20(), d / f"{name}.h5", progress=events.append, chunk=chunk), calls[n0:],
+                         events)
     finally:
         mp.undo()
     return d, out
@@ -52,6 +55,19 @@ def test_identical_bytes_across_chunk_sizes(chunked):
     d, out = chunked
     assert out["c16"][0].chunk == 16 and out["c64"][0].chunk == 32 and out["c16"][0].failed == 0
     assert _bytes(d / "c16.h5") == _bytes(d / "c64.h5")
+
+
+def test_make_dataset_reports_every_phase_in_order(chunked):
+    """Progress (issue 34, bearingsim.datasets.progress), reported to a callable on the runs above
+    (chunk 16: two chunks side by side, one wave; chunk 64: one chunk): preparing (before the
+    items are drawn), compiling, simulating, writing, done, in order; no remaining time, as no
+    chunk finished after the first wave (nothing measured to base it on)."""
+    for name in ("c16", "c64"):
+        events = chunked[1][name][2]
+        phases = [e.phase for e in events]
+        assert [p for k, p in enumerate(phases) if k == 0 or p != phases[k - 1]] == list(PHASES), name
+        assert events[0].total == 0 and events[-1].done == events[-1].total == 20
+        assert all(e.remaining is None and e.rate is None for e in events)
 
 
 def test_reproducible_from_the_seed(chunked):

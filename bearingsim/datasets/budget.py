@@ -104,7 +104,8 @@ class Estimate:
             if self.load_seconds else ""
         return (f"{self.what}: needs ~{human_bytes(self.memory)} of memory per process, "
                 f"~{human_bytes(self.disk)} of disk, ~{_human_time(t)}"
-                f"{f' on {workers} workers' if workers > 1 else ' in one process'}{comp} (rough)")
+                f"{f' on {workers} workers' if workers > 1 else ' in one process'}{comp} (rough: a prior from "
+                "costs measured on a 2-core machine, docs/scale.md; a data set's progress shows the measured rate)")
 
     def check(self, source, output=None):
         """Raise :class:`InputError` if the memory or the disk cannot fit (every problem at once)."""

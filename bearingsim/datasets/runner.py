@@ -35,6 +35,7 @@ from ..signals.signal_stage import SignalSettings
 from .program import CHUNK_FIELDS, Physics, micro_batch, program_threads, run_settings, simulate_chunk
 from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
+from .progress import Display, RunProgress
 from .writer import (assemble, chunk_path, compression_options, finished_chunks, open_partial, partial_path,
                      read_chunk, spec_record, write_chunk)
 
@@ -206,7 +207,7 @@ def signal_settings(case, ds, fs, T, physics):
 
 
 def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=None,
-                 compression=None) -> DatasetSummary:
+                 compression=None, max_speed_rpm=None) -> DatasetSummary:
     """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5), resumably.
 
     Finished chunks go to :func:`partial_path` at once; a rerun after an interruption continues
@@ -216,11 +217,25 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     runs the chunks on a Dask cluster; the file is the same.  ``device``: "cpu" | "gpu" | None
     (:func:`resolve_device`); ``chunk``: items per chunk (None: the spec's ``chunk``; 0 or "auto":
     :func:`default_chunk`); ``compression`` of /signals: "none" (default), "gzip", "zstd", "lzf", "gzip1"
-    (:mod:`bearingsim.datasets.writer`).  Returns a :class:`DatasetSummary` (``failed``: items with
+    (:mod:`bearingsim.datasets.writer`); ``max_speed_rpm``: size the programs for at least this
+    speed (default the spec's fastest; identify's twins pass their bank's, so a twin at any speed
+    runs the bank-sized programs kept by the first).  Returns a :class:`DatasetSummary` (``failed``: items with
     result != 0; ``seconds``: wall time of this run's simulations, compilation included;
-    ``device``, ``chunk``)."""
+    ``device``, ``chunk``).  ``progress``: True a bar on a terminal, a line per phase and chunk
+    otherwise (from the first second, the remaining time measured: :mod:`bearingsim.datasets.progress`);
+    False nothing; a callable receives every :class:`~bearingsim.datasets.progress.ProgressEvent`."""
+    show = Display("dataset") if progress is True else progress if callable(progress) else None
+    try:
+        return _make_dataset(case, path, RunProgress(show if show is not None else lambda e: None), runner,
+                             device=device, chunk=chunk, compression=compression, max_speed_rpm=max_speed_rpm)
+    finally:
+        if isinstance(show, Display):
+            show.close()
+
+
+def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_speed_rpm) -> DatasetSummary:
+    """:func:`make_dataset` reporting to ``track`` (a :class:`RunProgress`, in phase "preparing")."""
     import jax
-    from tqdm import tqdm
 
     compression_options(compression)                    # a bad name fails before any work
     imap = serial_imap if runner is None else runner.imap
@@ -245,14 +260,13 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     if chunk != asked and asked != n:
         warnings.warn(f"dataset.chunk {asked} rounded up to {chunk} items: a chunk is a whole number of "
                       f"micro-batches of {width} items on {dev.platform} (bearingsim.datasets.MICRO_BATCH)",
-                      SettingWarning, stacklevel=2)
+                      SettingWarning, stacklevel=3)     # the caller of make_dataset
     slots = slots_of(lab)
     loc, extent, depth, center = defect_geometry(ph.bearing, lab)
     folder = partial_path(path)
     spec = spec_record(case, ds, n, T, fs, chunk)
     t0 = time.perf_counter()
     done = 0
-    bar = None
     where = jax.default_device(dev) if runner is None else contextlib.nullcontext()
     try:
         with _signals_stop(), where:
@@ -266,26 +280,25 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
             sub = open_partial(folder, spec, lambda: run_settings(ph, lab, extent, depth, center, fs))
             todo = [k for k in range(chunks) if not chunk_path(folder, k).exists()]
             done = n - sum(min(chunk, n - k * chunk) for k in todo)
-            bar = tqdm(total=n, initial=done, desc=f"dataset ({dev.platform})", unit="item",
-                       disable=None if progress else True, dynamic_ncols=True)
             plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
                              duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
-                             width, dev.platform, float(ds["speed_rpm"][1]))
+                             width, dev.platform, max(float(ds["speed_rpm"][1]), float(max_speed_rpm or 0.0)))
             threads = program_threads(dev) if runner is None else 1
+            wave = todo[:threads if runner is None else getattr(runner, "workers", None) or 1]
+            track.start(n, done, sum(min(chunk, n - k * chunk) for k in wave))     # the first wave compiles
             run = (threaded_imap(threads), _chunk_alone) if threads > 1 and len(todo) > 1 else (imap, simulate_chunk)
             for k, out in run[0](run[1], plan, todo):     # finished chunks, streamed in order
                 write_chunk(folder, k, out)
                 done += out["index"].size
-                bar.update(out["index"].size)
+                track.advance(out["index"].size)
                 del out
-            bar.close()
+            track.report("writing")
             it = max(int(np.max(read_chunk(folder, k, "ball_iterations"), initial=1)) for k in range(chunks))
             assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, "newmark", chunks, modes,
                      CHUNK_FIELDS, compression)
             shutil.rmtree(folder, ignore_errors=True)
+            track.report("done")
     except (_Stop, KeyboardInterrupt) as e:
-        if bar is not None:
-            bar.close()
         how = e.name if isinstance(e, _Stop) else (str(e) if str(e) in ("SIGINT", "SIGTERM") else "SIGINT")
         if folder.is_dir() and not finished_chunks(folder):     # nothing worth keeping
             shutil.rmtree(folder, ignore_errors=True)

@@ -20,6 +20,8 @@ supply lines
 line amplitudes
     One linear least-squares fit of a cosine and a sine at every shaft harmonic k f_r (k = 1..6)
     and every kept supply harmonic (below 0.45 fs) to the whole record: amplitude sqrt(a^2 + b^2).
+    (A record longer than ``background_fit.MAX_ANALYSIS_SAMPLES`` samples is analysed over its first
+    that many, as the output says: the memory stays bounded.)
 knocks
     The residual (record minus the fitted lines) is band-passed from 1 kHz to 0.45 fs; samples
     whose Hilbert envelope exceeds 7 robust standard deviations (1.4826 MAD of the band-passed
@@ -74,8 +76,8 @@ from pathlib import Path
 import numpy as np
 
 from ..signals.background import Background
-from .background_fit import (MODULATION_HARMONICS, broadband_shape, fit_knocks, fit_lines, modulation_depths,
-                             psd_resonances, shaft_speed, supply_lines)
+from .background_fit import (MODULATION_HARMONICS, analysed_length, broadband_shape, fit_knocks,
+                             fit_lines, modulation_depths, psd_resonances, shaft_speed, supply_lines)
 from ..case import case_from_dict, check_sampling, load_case, to_toml
 from ..datasets.runner import make_dataset
 from ..names import CLASSES
@@ -122,6 +124,7 @@ class MachineCalibration:
     signal_gain: float | None          # fitted to the fault record (None: template's range)
     signal_gain_range: tuple
     fault: dict = field(default_factory=dict)   # class, rpm, rms, healthy rms, simulated rms
+    record_s: float | None = None      # the healthy record's whole length; duration_s: the part analysed
 
 
 def _record_rms(x):
@@ -180,6 +183,8 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
     top_rpm = 1.1 * float(shaft_rpm if shaft_rpm is not None else nominal)
     x = check_record(healthy, sample_rate, source, tpl, top_rpm) * UNITS[unit]
     fs = float(sample_rate)
+    record_s = x.size / fs
+    x = x[:analysed_length(x.size)]      # at most background_fit.MAX_ANALYSIS_SAMPLES: bounded memory, said
     x = x - x.mean()
     T = x.size / fs
     if shaft_rpm is not None:
@@ -207,7 +212,8 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
 
     raw = copy.deepcopy(tpl.raw)
     raw["title"] = title or f"Data set calibrated to the machine of {Path(source).name}"
-    raw["description"] = (f"Written by bearingsim calibrate from {source} ({T:.2f} s at {fs:g} Hz, shaft "
+    used = f"the first {T:.2f} s of {record_s:.2f} s" if T < record_s else f"{T:.2f} s"
+    raw["description"] = (f"Written by bearingsim calibrate from {source} ({used} at {fs:g} Hz, shaft "
                           f"{60 * fr:.1f} rpm from the {how})" + (f" and a {fault_class} fault record" if fault_class else "")
                           + f"; template {tpl.source}.")
     dyn = raw.setdefault("dynamics", {})
@@ -255,6 +261,7 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
             raise InputError(f"{fault_source}: sample rate {ffs:g} Hz differs from the healthy record's "
                              f"{fs:g} Hz: the data set has one rate")
         y = check_record(fault, ffs, fault_source, tpl, top_rpm) * UNITS[unit]
+        y = y[:analysed_length(y.size)]
         frf = float(fault_rpm) / 60.0 if fault_rpm is not None else shaft_speed(y, fs, fr, search=0.03)
         rms_f, rms_h = _record_rms(y), _record_rms(x)
         excess = math.sqrt(max(rms_f ** 2 - rms_h ** 2, 0.0))
@@ -274,7 +281,7 @@ def calibrate_machine(healthy, sample_rate, case, *, unit, shaft_rpm=None, nomin
     out = case_from_dict(raw, "<calibrated spec>")
     check_sampling(out, out.data["dataset"]["speed_rpm"][1], "dataset.speed_rpm max")
     return MachineCalibration(out, text, fs, T, fr, how, bg, detected, float(excess_db), res, fr_range, z_range,
-                              gain, tuple(gain_range), fault_info)
+                              gain, tuple(gain_range), fault_info, record_s)
 
 
 def _r(v, d=6):
