@@ -48,7 +48,7 @@ import bearingsim as bs  # noqa: E402
 from bearingsim.realism import calibration as cal  # noqa: E402
 from bearingsim.realism import rig_record as rl  # noqa: E402
 from bearingsim.case import load_case  # noqa: E402
-from bearingsim.signals.envelope import record_metrics  # noqa: E402
+from bearingsim.signals.lines import record_metrics  # noqa: E402
 
 INCH = 25.4e-3
 SIZES = {0.007: REPO / "cases" / "cwru_6205_or007.toml", 0.021: REPO / "cases" / "cwru_6205.toml"}
@@ -100,7 +100,7 @@ def engine_run(case, depth, overrides, seed, duration):
     _, _, r, _ = rl.simulate_record(c, duration=duration, sample_rate=FS_SIM, seed=seed,
                                     overrides=overrides)
     log(f"    engine run: {duration} s in {time.time() - t0:.0f} s wall (substeps {r.substeps}, "
-        f"ball iterations {r.ball_iterations}), BPFO {r.frequencies['bpfo_Hz']:.3f} Hz")
+        f"ball iterations {r.ball_iterations}), BPFO {r.frequencies.bpfo:.3f} Hz")
     return r
 
 
@@ -312,7 +312,7 @@ def main():
     for size in (0.007, 0.021):
         log(f"    {size} in")
         runs[size] = engine_run(cases[size], depths[size], overrides, FIT_SEED, args.duration)
-    shaft_hz = runs[0.021].frequencies["shaft_Hz"]
+    shaft_hz = runs[0.021].frequencies.shaft
 
     log("D. mode shapes from the spectra of 130 and 234 (12 kHz)")
     shapes = fit_mode_shapes(data, runs)
@@ -343,7 +343,7 @@ def main():
         y48 = y48 / cal.G
         y12, fs12 = rl.decimate_record(y48, FS_SIM, 12000.0)
         for fs, y in ((12000, y12), (48000, y48)):
-            sim = metrics_of(y, float(fs), r.frequencies["shaft_Hz"])
+            sim = metrics_of(y, float(fs), r.frequencies.shaft)
             real = reals[(size, fs)]
             rows.append((size, fs, sim, real, cal.compare_metrics(sim, real)))
     print_table(rows)

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from bearingsim import dynamics as dyn
-from bearingsim.signals import sensor
+from bearingsim.dynamics import sensor
 from bearingsim.physics.defect import Spall
 from bearingsim.physics.geometry import Bearing
+from oracles import motion_numpy as oracle
 from oracles.motion_numpy import draw_motion as numpy_draw_motion
 
 Z = 9
@@ -31,7 +32,7 @@ def draws(n, realism, duration=0.1, omega_c=2 * np.pi * 11.9, omega0=2 * np.pi *
 
 
 def test_slip_draws_statistics():
-    """eps_k ~ N(0, sigma^2) per pitch (MODEL.md section 7, realism 'slip_percent', shipped
+    """eps_k ~ N(0, sigma^2) per pitch (docs/model.md section 7, realism 'slip_percent', shipped
     0.9 %): over 2000 runs (~20 000 pitches) the sample mean is within 4 standard errors of 0 and
     the sample s.d. within 3 % of sigma (its standard error is sigma / sqrt(2 n) ~ 0.5 %)."""
     sigma = 0.009
@@ -54,7 +55,7 @@ def test_slip_walk_limits_and_coverage():
     p = 2 * norm.sf(0.5 / sigma)
     frac = np.mean(np.abs(eps) == 0.5)
     assert abs(frac - p) < 3 * np.sqrt(p * (1 - p) / eps.size)
-    ok = jax.vmap(lambda mm: dyn.motion_ok_device(mm, Z, 0.1))(m)
+    ok = jax.vmap(lambda mm: dyn.motion_ok(mm, Z, 0.1))(m)
     assert bool(np.all(np.asarray(ok)))
 
 
@@ -65,7 +66,7 @@ def test_pass_intervals_follow_slip(bearing):
     m, _ = draws(2000, dyn.Realism(slip_percent=100 * sigma), omega_c=wc)
     sp = (Spall(0.0, 0.05, 1e-5, "rectangular", "outer", 0),)
     P = 40
-    t = jax.jit(jax.vmap(lambda mm: dyn.defect_times_device(mm, Z, sp, 0.0, 0.1, P, ("mid",))[0]))(m)
+    t = jax.jit(jax.vmap(lambda mm: dyn.defect_times(mm, Z, sp, 0.0, 0.1, P, ("mid",))[0]))(m)
     t = np.asarray(t)
     with np.errstate(invalid="ignore"):
         d = np.diff(t, axis=1)
@@ -84,14 +85,14 @@ def test_speed_fluctuation_rms_and_spectrum():
     realism = dyn.Realism(speed_fluctuation_percent=100 * a, speed_fluctuation_bandwidth_Hz=B)
     m, _ = draws(2000, realism)
     t = jnp.linspace(0.0, 0.1, 5)
-    w = jax.vmap(lambda mm: dyn.motion_at_device(mm, Z, t)[2])(m)
+    w = jax.vmap(lambda mm: dyn.motion_at(mm, Z, t)[2])(m)
     dev = np.asarray(w) / (2 * np.pi * 30.0) - 1.0
     rms = np.sqrt(np.mean(dev ** 2))
     assert abs(rms / a - 1) < 0.04
     f = np.asarray(m.fluct_freqs)
     assert f.min() > 0 and f.max() <= B
     assert abs(f.mean() / (B / 2) - 1) < 0.02
-    host = np.array([dyn.motion_at(numpy_draw_motion(s, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 30.0, 0.1, 0.0, realism),
+    host = np.array([oracle.motion_at(numpy_draw_motion(s, Z, 0.0, 2 * np.pi * 11.9, 2 * np.pi * 30.0, 0.1, 0.0, realism),
                                    np.asarray(t))[2] for s in range(600)]) / (2 * np.pi * 30.0) - 1.0
     assert abs(np.sqrt(np.mean(host ** 2)) / rms - 1) < 0.06
 
@@ -102,45 +103,49 @@ def _host_motion(seed=3):
 
 
 @pytest.mark.parametrize("location", ["outer", "inner", "ball"])
-def test_device_times_equal_host(location):
-    """The device's edge and pass times (padded with +inf) equal defect_edge_times /
-    defect_pass_times of the same motion to 1e-9 s (the same interpolation on the same grid;
-    a step is 2e-5 s)."""
+def test_defect_times_equal_the_numpy_oracle(location):
+    """The edge and pass times (the program's padded lists, and a single run's
+    defect_edge_times / defect_pass_times) equal the NumPy oracle's crossings of the same motion
+    to 1e-9 s (the same interpolation on the same grid; a step is 2e-5 s)."""
     m = _host_motion()
-    md = dyn.device_motion_of(m)
+    md = oracle.to_motion(m)
     sp = Spall(0.7, 0.04, 1e-5, "rectangular", location, 0)
     k = 2.3 if location == "ball" else 0.0
-    for offsets, dur, ref in ((("lo", "hi"), 0.1 + 1 / FS, dyn.defect_edge_times(m, sp, 0.1 + 1 / FS, k)),
-                              (("mid",), 0.1, dyn.defect_pass_times(m, sp, 0.1, k))):
-        t, ok = dyn.defect_times_device(md, Z, (sp,), k, dur, 40, offsets)
+    for offsets, dur, ref, one in ((("lo", "hi"), 0.1 + 1 / FS, oracle.defect_edge_times(m, sp, 0.1 + 1 / FS, k),
+                                    dyn.defect_edge_times(md, Z, sp, 0.1 + 1 / FS, k)),
+                                   (("mid",), 0.1, oracle.defect_pass_times(m, sp, 0.1, k),
+                                    dyn.defect_pass_times(md, Z, sp, 0.1, k))):
+        t, ok = dyn.defect_times(md, Z, (sp,), k, dur, 40, offsets)
         t = np.asarray(t)
         assert bool(ok)
         got = t[np.isfinite(t)]
         assert got.size == ref.size > 3
         np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(one, ref, rtol=0, atol=1e-9)
     inactive = Spall(0.7, 0.04, 0.0, "rectangular", location, 0)
-    t, _ = dyn.defect_times_device(md, Z, (inactive,), k, 0.1, 40, ("mid",))
+    t, _ = dyn.defect_times(md, Z, (inactive,), k, 0.1, 40, ("mid",))
     assert np.all(np.isinf(np.asarray(t)))
 
 
 def test_pass_list_overflow_is_flagged():
-    m = dyn.device_motion_of(_host_motion())
+    m = oracle.to_motion(_host_motion())
     sp = Spall(0.0, 0.04, 1e-5, "rectangular", "outer", 0)
-    _, ok = dyn.defect_times_device(m, Z, (sp,), 0.0, 0.1, 5, ("mid",))
+    _, ok = dyn.defect_times(m, Z, (sp,), 0.0, 0.1, 5, ("mid",))
     assert not bool(ok)
 
 
 def test_stages_and_jumps_equal_host():
-    """The time loop's inputs built on the device equal motion_at at the stage instants and an
-    independent NumPy search of the first edge at or after each step's start (1e-12)."""
+    """The time loop's inputs built on the device equal the NumPy oracle's motion_at at the stage
+    instants and an independent NumPy search of the first edge at or after each step's start
+    (1e-12)."""
     m = _host_motion()
-    md = dyn.device_motion_of(m)
+    md = oracle.to_motion(m)
     sub, T = 2, 700
     st = np.asarray(dyn.motion_stages(md, Z, 100, T, FS, "newmark", sub))
     t = (100 + np.arange(T)[:, None] + (np.arange(sub)[None, :] + 1.0) / sub) / FS     # Newmark: step ends
-    ref = np.stack(dyn.motion_at(m, t), -1)
+    ref = np.stack(oracle.motion_at(m, t), -1)
     np.testing.assert_allclose(st[:, :, 0, :], ref, rtol=1e-12, atol=1e-12)
-    edges = dyn.defect_edge_times(m, Spall(0.0, 0.04, 1e-5, "rectangular", "outer", 0), 0.1)
+    edges = oracle.defect_edge_times(m, Spall(0.0, 0.04, 1e-5, "rectangular", "outer", 0), 0.1)
     h = 1.0 / (sub * FS)
     pad = np.concatenate([edges, np.full(7, np.inf)])
     j = np.asarray(dyn.edge_fractions(jnp.asarray(pad), 100, T, sub, h))

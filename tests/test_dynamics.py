@@ -1,4 +1,4 @@
-"""Dynamic layer (MODEL.md section 7): equilibrium, quasi-static limit, impulses at BPFO."""
+"""Dynamic layer (docs/model.md section 7): equilibrium, quasi-static limit, impulses at BPFO."""
 from pathlib import Path
 
 import h5py
@@ -9,7 +9,7 @@ import scipy.signal as ss
 import bearingsim as bs
 from bearingsim.physics import hertz
 from bearingsim import dynamics as dyn
-from bearingsim.signals import sensor
+from bearingsim.dynamics import sensor
 from bearingsim.case import load_case, parse_case
 from bearingsim.signals.envelope import envelope_spectrum, peak_frequency, squared_envelope
 from bearingsim.physics.sweep import sweep
@@ -88,7 +88,7 @@ def test_one_impulse_per_spall_pass(cwru, cwru_run):
     band = (2625.0, 3375.0)
     env = squared_envelope(np.asarray(r.sensor_acceleration), fs, band)
     env = env - env.min()
-    bpfo = r.frequencies["bpfo_Hz"]
+    bpfo = r.frequencies.bpfo
     peaks, _ = ss.find_peaks(env, height=0.2 * env.max(), distance=int(0.6 * fs / bpfo))
     passes = r.pass_times[(r.pass_times > 0.0) & (r.pass_times < t[-1] - 2e-3)]
     assert len(passes) >= 30
@@ -101,18 +101,18 @@ def test_one_impulse_per_spall_pass(cwru, cwru_run):
 def test_envelope_peak_at_bpfo(cwru_run):
     r = cwru_run
     es = envelope_spectrum(np.asarray(r.sensor_acceleration), 48000.0, band=(2625.0, 3375.0))
-    bpfo = r.frequencies["bpfo_Hz"]
+    bpfo = r.frequencies.bpfo
     fp = peak_frequency(es, bpfo, rel_window=0.05)
     assert abs(fp - bpfo) / bpfo < 5e-3, (fp, bpfo)
 
 
 def test_reported_bpfo_matches_cwru(cwru_run):
     fr = cwru_run.frequencies
-    assert fr["shaft_Hz"] == pytest.approx(1797 / 60)
-    ratio = fr["bpfo_Hz"] / fr["shaft_Hz"]
+    assert fr.shaft == pytest.approx(1797 / 60)
+    ratio = fr.bpfo / fr.shaft
     # quasi-static cage speed at the loaded contact angle vs the alpha = 0 CWRU multiplier
     assert ratio == pytest.approx(CWRU_BPFO_MULT, rel=0.02)
-    assert fr["bpfo_Hz"] == pytest.approx(9 * fr["ftf_Hz"])
+    assert fr.bpfo == pytest.approx(9 * fr.ftf)
 
 
 def test_fixed_step_matches_adaptive_reference(cwru):
@@ -172,10 +172,10 @@ def test_step_inside_a_step_is_exact():
 
 def key_motion(seed, Z, theta0, wc, w0, duration, center=0.0, realism=dyn.Realism()):
     """The package's draw (from the key of item 0 of a run seeded ``seed``, as simulate draws it)
-    as a host Motion."""
+    (a dynamics.Motion)."""
     nk = dyn.knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
     dm = dyn.draw_motion(dyn.item_keys(seed, [0])[0], Z, theta0, wc, w0, duration, center, realism, nk)
-    return dyn.host_motion_of(dm, Z, seed)
+    return dm
 
 
 def jnp_float(x):
@@ -190,21 +190,21 @@ def test_slip_jitters_the_pass_interval():
     T = 2 * np.pi / Z / wc
     sp = bs.Spall(0.3, 0.02, 1e-4, "rectangular")
     m = key_motion(5, Z, 0.0, wc, 188.0, 30.0, float(sp.center), dyn.Realism(slip_percent=1.5))
-    tp = dyn.spall_pass_times(m, sp, 30.0)
+    tp = dyn.defect_pass_times(m, Z, sp, 30.0)
     d = np.diff(tp) / T
     assert d.size > 3000
     assert abs(d.mean() - 1.0) < 2e-3
     assert d.std() == pytest.approx(0.015, rel=0.06)
     assert np.corrcoef(d[:-1], d[1:])[0, 1] == pytest.approx(0.0, abs=0.06)    # independent
     m0 = key_motion(5, Z, 0.0, wc, 188.0, 1.0, float(sp.center))
-    assert np.ptp(np.diff(dyn.spall_pass_times(m0, sp, 1.0))) < 1e-9
+    assert np.ptp(np.diff(dyn.defect_pass_times(m0, Z, sp, 1.0))) < 1e-9
 
 
 def test_speed_fluctuation_and_noise_levels():
     m = key_motion(2, 9, 0.0, 75.0, 188.0, 20.0, 0.0, dyn.Realism(speed_fluctuation_percent=2.0,
                                                                         speed_fluctuation_bandwidth_Hz=4.0))
     t = np.linspace(0, 20, 200001)
-    _, _, w = dyn.motion_at(m, t)
+    _, _, w = dyn.motion_at(m, 9, t)
     assert np.std(w / 188.0 - 1.0) == pytest.approx(0.02, rel=0.35)      # 8 random sinusoids
     import jax
     x = np.asarray(sensor.measurement_noise(jax.random.PRNGKey(0), 48000, 0.686, 48000.0, (2000.0, 6000.0)))

@@ -1,4 +1,4 @@
-"""The four fault classes in the dynamics (MODEL.md section 9): envelope lines of an inner-race
+"""The four fault classes in the dynamics (docs/model.md section 9): envelope lines of an inner-race
 and a ball defect, depth -> 0 gives the healthy bearing, and a four-class data set whose labels
 match its classes.
 
@@ -26,7 +26,7 @@ REPO = Path(__file__).resolve().parents[1]
 DURATION, FS = 0.5, 12000.0
 BAND = (2500.0, 5500.0)
 # A line "stands above the floor" when it is >= 10 dB over the median of the spectrum over
-# 0.5-1.5 x the fault frequency (the local median of bearingsim.signals.envelope.record_metrics).  With
+# 0.5-1.5 x the fault frequency (the local median of bearingsim.signals.lines.record_metrics).  With
 # realism off the floor is only leakage and the impacts' own broadband content; the measured
 # sidebands stand 25-28 dB over it (inner +-f_r) and 25-26 dB (ball +-FTF), so 10 dB separates
 # "a line" from "no line" with a wide margin while not depending on the exact level.
@@ -96,19 +96,19 @@ def _check_line_and_sidebands(res, f0, f_side, what, side):
 
 
 def test_inner_race_envelope_peaks_at_bpfi_with_shaft_sidebands(records):
-    """MODEL.md 9: a ball meets the inner spall at BPFI; the spall crosses the fixed load zone
+    """docs/model.md section 9: a ball meets the inner spall at BPFI; the spall crosses the fixed load zone
     once per shaft turn, so the impacts are amplitude-modulated at f_r: BPFI +- f_r."""
     res = records["inner"]
     fq = res.frequencies
-    _check_line_and_sidebands(res, fq["bpfi_Hz"], fq["shaft_Hz"], "BPFI", "f_r")
+    _check_line_and_sidebands(res, fq.bpfi, fq.shaft, "BPFI", "f_r")
 
 
 def test_ball_pit_envelope_peaks_at_2bsf_with_cage_sidebands(records):
-    """MODEL.md 9: the pit meets the outer and the inner raceway once per ball turn each (2 BSF
+    """docs/model.md section 9: the pit meets the outer and the inner raceway once per ball turn each (2 BSF
     impacts); the pitted ball orbits with the cage through the load zone: 2 BSF +- FTF."""
     res = records["ball"]
     fq = res.frequencies
-    _check_line_and_sidebands(res, 2.0 * fq["bsf_Hz"], fq["ftf_Hz"], "2BSF", "FTF")
+    _check_line_and_sidebands(res, 2.0 * fq.bsf, fq.ftf, "2BSF", "FTF")
 
 
 @pytest.mark.parametrize("loc", ["inner", "ball"])
@@ -133,7 +133,7 @@ def test_depth_zero_is_the_healthy_bearing(records, loc):
 # ------------------------------------------------------------------------------ data set
 @pytest.fixture(scope="module")
 def four_class_dataset(tmp_path_factory):
-    from bearingsim.app.workflows import dataset_case
+    from bearingsim.app.signal_workflows import dataset_case
 
     spec = load_case(REPO / "cases" / "dataset_cwru.toml")
     # outer_fraction defaults to the rest: set inner and ball before healthy so every
@@ -182,10 +182,10 @@ def test_four_class_dataset_labels(four_class_dataset):
         sol = bs.solve(b, op, F, cage_angle=spec.cage_angle, spall=sp, hertz_method=spec.hertz_method)
         fq, _ = characteristic_frequencies(b, op, sol)
         for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"):
-            assert row[k] == pytest.approx(fq[k], rel=1e-9), (
+            assert row[k] == pytest.approx(fq.hz()[k], rel=1e-9), (
                 f"item {row['index']} ({names[str(c)]}): {k} labelled {row[k]:.6f}, "
-                f"characteristic_frequencies gives {fq[k]:.6f}")
-    # the CWRU orders (reference-data.md, alpha = 0): BPFI 5.4152, 2 BSF 4.7135, within 1 %
+                f"characteristic_frequencies gives {fq.hz()[k]:.6f}")
+    # the CWRU orders (docs/reference-data.md, alpha = 0): BPFI 5.4152, 2 BSF 4.7135, within 1 %
     # (the dataset bearing has clearance and a load-dependent contact angle near 0)
     for k, order in (("bpfi_Hz", 5.4152), ("bsf_Hz", 4.7135 / 2)):
         got = lab[k] / lab["shaft_Hz"]

@@ -6,12 +6,14 @@ import pytest
 
 from bearingsim.signals.background import Background
 from oracles.background_numpy import background_signal, random_background, shaped_noise
-from bearingsim.signals.features import FEATURE_NAMES, FaultOrders, cut_windows, fault_orders, octave_bands, window_features
+from bearingsim.physics.kinematics import DefectFrequencies
+from bearingsim.signals.features import FEATURE_NAMES, cut_windows, fault_orders, octave_bands, window_features
 from oracles.passes_numpy import pass_variation, strike_mask
 
 FS = 12000.0
 FR = 29.95
-ORD = FaultOrders(3.5848, 5.4152, 4.7135, 0.39828)   # CWRU 6205 (reference-data.md)
+# CWRU 6205 orders (docs/reference-data.md): shaft 1, FTF, BPFO, BPFI, BSF (2 BSF = 4.7135)
+ORD = DefectFrequencies(1.0, 0.39828, 3.5848, 5.4152, 4.7135 / 2)
 
 
 def impulses(rate, n, fs=FS, f_res=3000.0, zeta=0.03, amplitude=1.0, seed=0, noise=0.3, mod=None):
@@ -37,7 +39,7 @@ def test_fault_orders_are_the_cwru_table(cwru=None):
     import bearingsim as bs
     b = bs.Bearing(9, 7.94004e-3, 39.0398e-3, 0.52, 0.52, 0.0)
     o = fault_orders(b)
-    # reference-data.md: BPFI 5.4152, BPFO 3.5848, FTF 0.39828, 2 BSF 4.7135 (published rounding)
+    # docs/reference-data.md: BPFI 5.4152, BPFO 3.5848, FTF 0.39828, 2 BSF 4.7135 (published rounding)
     assert o.bpfo == pytest.approx(3.5848, abs=1e-4) and o.bpfi == pytest.approx(5.4152, abs=1e-4)
     # the published FTF 0.39828 is 4e-5 below BPFO / Z = 0.39831: their own rounding
     assert o.ftf == pytest.approx(0.39828, abs=5e-5) and o.two_bsf == pytest.approx(4.7135, abs=1e-4)

@@ -1,7 +1,7 @@
 """Real CWRU records (../shared/realdata, never committed) against bearingsim.
 
 1. ``signal.record_metrics`` is the reference analysis: it reproduces analyze_real.py's own numbers
-   on the real records (to round-off) and the real-record table of reference-data.md at its printed
+   on the real records (to round-off) and the real-record table of docs/reference-data.md at its printed
    precision.
 2. Simulated CWRU signals (calibrated case files) against the real records, issue 9 targets.
 
@@ -14,19 +14,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bearingsim.signals.envelope import record_metrics
+from bearingsim.signals.lines import record_metrics
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO / ".." / "shared" / "realdata"
-REFERENCE_MD = REPO / ".." / "shared" / "reference-data.md"
-BPFO_ORDER = 3.5848                      # nominal CWRU multiplier (reference-data.md)
+REFERENCE_MD = REPO / "docs" / "docs/reference-data.md"
+BPFO_ORDER = 3.5848                      # nominal CWRU multiplier (docs/reference-data.md)
 
 pytestmark = pytest.mark.skipif(
     not (DATA / "analyze_real.py").is_file(),
     reason=f"real CWRU records not found in {DATA.resolve()} (they are never committed; "
            "see ../shared/realdata/README.md)")
 
-OUTER = {  # reference-data.md row label -> file stem
+OUTER = {  # docs/reference-data.md row label -> file stem
     "outer 0.007 in @6:00, 12 kHz (130)": "cwru_OR007_6_0hp_12k",
     "outer 0.021 in @6:00, 12 kHz (234)": "cwru_OR021_6_0hp_12k",
 }
@@ -69,12 +69,12 @@ def _reference_rows():
 
 @pytest.mark.parametrize("label", list(OUTER))
 def test_reference_table_reproduced(label):
-    """The reference-data.md row (RMS, kurtosis, peak order, peak over the 30-600 Hz median,
+    """The docs/reference-data.md row (RMS, kurtosis, peak order, peak over the 30-600 Hz median,
     A2/A1, A3/A1) at its printed precision (half a unit of the last printed digit)."""
     if not REFERENCE_MD.is_file():
         pytest.skip(f"{REFERENCE_MD.resolve()} not found")
     rows = _reference_rows()
-    assert label in rows, f"row {label!r} not found in reference-data.md"
+    assert label in rows, f"row {label!r} not found in docs/reference-data.md"
     d = np.load(DATA / f"{OUTER[label]}.npz")
     m = record_metrics(d["DE"].astype(np.float64), float(d["fs"]), float(d["rpm"]) / 60, BPFO_ORDER)
     got = [m.rms, m.kurtosis, m.peak_order, m.peak_over_median_db, m.a2_a1, m.a3_a1]
@@ -118,7 +118,7 @@ def simulated():
         case = load_case(REPO / "cases" / name)
         y, fs, res, _ = rl.simulate_record(case, duration=SIM_SEGMENTS * DURATION, sample_rate=48000.0, seed=SEED)
         y = y / cal.G
-        shaft = res.frequencies["shaft_Hz"]
+        shaft = res.frequencies.shaft
         out[size, 48000] = cal.segment_metrics(y, fs, shaft, DURATION)[0]
         y12, fs12 = rl.decimate_record(y, fs, 12000.0)
         out[size, 12000] = cal.segment_metrics(y12, fs12, shaft, DURATION)[0]
@@ -224,7 +224,7 @@ def fault_simulated():
         case = load_case(REPO / "cases" / name)
         y, fs, res, _ = rl.simulate_record(case, duration=DURATION, sample_rate=48000.0, seed=SEED)
         y = y / cal.G
-        shaft = res.frequencies["shaft_Hz"]
+        shaft = res.frequencies.shaft
         side = 1.0 if kind == "inner" else FTF_ORDER
         y12, fs12 = rl.decimate_record(y, fs, 12000.0)
         for f_s, yy in ((48000, y), (12000, y12)):
@@ -236,7 +236,7 @@ def fault_simulated():
 @pytest.mark.parametrize("fs", [12000, 48000])
 def test_inner_race_bpfi_order_and_sidebands_match_the_rig(fault_real, fault_simulated, fs):
     """Issue 11: BPFI order of the simulated IR 0.007 in record within 0.3 % of the measured one
-    (105/109: 5.398, i.e. the 5.40 of reference-data.md; simulated 5.405, the case's axial load
+    (105/109: 5.398, i.e. the 5.40 of docs/reference-data.md; simulated 5.405, the case's axial load
     43.7 N fitted on the outer-race BPFO order), and the same sideband structure: BPFI +- f_r
     present (>= SIDEBAND_DB over the local median) in both."""
     real, segs, sb_real = fault_real["inner", fs]
@@ -258,13 +258,13 @@ def test_ball_fault_as_measured(fault_real, fault_simulated):
     sidebands.  The real records have no stable 2 BSF line: the largest bin within +-5 % of
     2 BSF wanders over > 4 % in order from one 1-s segment to the next (4.50-4.81) and stands
     only ~6-7 dB over the local median, as on the normal record 97 (~6 dB at an arbitrary
-    frequency) -- the rig's ball-fault line is weak (reference-data.md: 4.60, weak), so the
+    frequency) -- the rig's ball-fault line is weak (docs/reference-data.md: 4.60, weak), so the
     simulated line (~39 dB) is far stronger than the rig's: that is a known miss, asserted as
     such (the real line order scatters; the real peak is > 20 dB weaker than the simulated)."""
     for fs in (12000, 48000):
         sim, sb_sim, res = fault_simulated["ball", fs]
         real, segs, _ = fault_real["ball", fs]
-        bsf2 = 2 * res.frequencies["bsf_Hz"] / res.frequencies["shaft_Hz"]
+        bsf2 = 2 * res.frequencies.bsf / res.frequencies.shaft
         assert abs(sim.peak_order / bsf2 - 1) <= 0.003, (
             f"simulated {fs // 1000} kHz: 2BSF order {sim.peak_order:.4f}, expected {bsf2:.4f} +- 0.3 %")
         for sign, db in zip("-+", sb_sim):

@@ -120,7 +120,7 @@ def test_decimate_record_anti_alias():
 
 def test_sensor_record_without_variability_is_the_sensor_path():
     from bearingsim.dynamics import DynamicsParameters
-    from bearingsim.signals.sensor import apply_sensor
+    from bearingsim.dynamics.sensor import apply_sensor
 
     fs = 48000.0
     rng = np.random.default_rng(2)
@@ -229,7 +229,7 @@ def test_engine_pass_variability_acts_on_the_sensor_path_only(cwru_runs):
     housing acceleration varied pass by pass with the labelled draws (vary_passes), plus the
     same noise; the motion, the housing acceleration and the noise equal those of the run with
     the variability off (the slip/noise streams do not move), and the records differ."""
-    from bearingsim.signals.sensor import apply_sensor
+    from bearingsim.dynamics.sensor import apply_sensor
 
     case, on, r, r0 = cwru_runs
     fs = 24000.0

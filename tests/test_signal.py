@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from bearingsim.signals import envelope as bsig
+from bearingsim.signals import lines as blines
 
 FS = 48_000.0
 FD = 107.36          # impact rate (Hz) = "BPFO" of the synthetic fault
@@ -162,10 +163,10 @@ def test_select_band_with_known_resonance_and_clipping():
 
 
 def test_defect_markers():
-    mk = bsig.defect_markers({"BPFO": 107.4, "FTF": 11.9, "shaft": 29.95})
+    mk = blines.defect_markers({"BPFO": 107.4, "FTF": 11.9, "shaft": 29.95})
     assert [lab for lab, _ in mk] == ["BPFO", "2xBPFO", "3xBPFO", "4xBPFO", "5xBPFO", "FTF", "shaft"]
     assert np.allclose([f for _, f in mk], [107.4, 214.8, 322.2, 429.6, 537.0, 11.9, 29.95])
-    assert len(bsig.defect_markers({"BPFO": 100.0}, n_harmonics=3)) == 3
+    assert len(blines.defect_markers({"BPFO": 100.0}, n_harmonics=3)) == 3
 
 
 def test_bandpass_is_zero_phase_and_unit_gain_in_band():
@@ -211,7 +212,7 @@ def test_plots_return_figure_and_save_png(fault, band, tmp_path):
 
     t, clean, x, t_imp = fault
     es = bsig.envelope_spectrum(x, FS, band=band)
-    mk = bsig.defect_markers({"BPFO": FD, "FTF": 11.9, "shaft": 29.95})
+    mk = blines.defect_markers({"BPFO": FD, "FTF": 11.9, "shaft": 29.95})
     fig = plot_envelope_spectrum(es, mk, title="env", path=tmp_path / "env.png")
     ax = fig.axes[0]
     assert ax.get_xlim()[1] == pytest.approx(1.2 * 5 * FD)
@@ -238,11 +239,11 @@ def test_record_metrics_of_known_signals():
     estimator, sqrt(24/n) = 0.016 for n = 96000)."""
     t = np.arange(96_000) / FS
     sine = 2.0 * np.sin(2 * np.pi * 1234.5 * t) + 7.0          # the mean is removed
-    m = bsig.record_metrics(sine, FS, 29.95, 3.5848)
+    m = blines.record_metrics(sine, FS, 29.95, 3.5848)
     assert m.rms == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-3)
     assert m.kurtosis == pytest.approx(1.5, rel=1e-3)
     g = np.random.default_rng(1).standard_normal(t.size) * 0.3
-    m = bsig.record_metrics(g, FS, 29.95, 3.5848)
+    m = blines.record_metrics(g, FS, 29.95, 3.5848)
     assert m.rms == pytest.approx(0.3, rel=0.01)
     assert abs(m.kurtosis - 3.0) < 5 * np.sqrt(24 / t.size)
 
@@ -255,7 +256,7 @@ def test_record_metrics_harmonic_ratios_of_a_periodic_impact_train():
     < 2 %) and the band-pass slightly shapes the envelope."""
     x = periodic_impacts()
     shaft = 29.95
-    m = bsig.record_metrics(x, FS, shaft, FD / shaft, band=(1500.0, 4500.0))
+    m = blines.record_metrics(x, FS, shaft, FD / shaft, band=(1500.0, 4500.0))
     a, w = 2 * ZETA * 2 * np.pi * FN, 2 * np.pi * FD
     for k, got in ((2, m.a2_a1), (3, m.a3_a1)):
         assert got == pytest.approx(np.hypot(a, w) / np.hypot(a, k * w), abs=0.03)
@@ -272,7 +273,7 @@ def test_record_metrics_peak_over_median_falls_with_noise():
     x = periodic_impacts(duration=1.0)
     rng = np.random.default_rng(3)
     noise = rng.standard_normal(x.size)
-    db = [bsig.record_metrics(x + s * noise, FS, 29.95, FD / 29.95).peak_over_median_db
+    db = [blines.record_metrics(x + s * noise, FS, 29.95, FD / 29.95).peak_over_median_db
           for s in (0.05, 0.5, 2.0)]
     assert db[0] > db[1] > db[2] and db[0] > 20.0
 
@@ -280,10 +281,10 @@ def test_record_metrics_peak_over_median_falls_with_noise():
 def test_record_metrics_bad_inputs():
     x = periodic_impacts(duration=0.2)
     with pytest.raises(ValueError, match="band must be a pair"):
-        bsig.record_metrics(x, FS, 29.95, 3.58, band=None)
+        blines.record_metrics(x, FS, 29.95, 3.58, band=None)
     with pytest.raises(ValueError, match="constant"):
-        bsig.record_metrics(np.ones(1000), FS, 29.95, 3.58)
+        blines.record_metrics(np.ones(1000), FS, 29.95, 3.58)
     with pytest.raises(ValueError, match="shaft_hz and fault_order must be > 0"):
-        bsig.record_metrics(x, FS, -1.0, 3.58)
+        blines.record_metrics(x, FS, -1.0, 3.58)
     with pytest.raises(ValueError, match=r"f_hi must be < fs/2"):
-        bsig.record_metrics(x, 12000.0, 29.95, 3.58, band=(2500.0, 6500.0))
+        blines.record_metrics(x, 12000.0, 29.95, 3.58, band=(2500.0, 6500.0))

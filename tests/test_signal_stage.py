@@ -6,9 +6,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim.signals import sensor
+from bearingsim.dynamics import passes as pv, sensor
 from oracles import passes_numpy as passes
 from bearingsim.signals import signal_stage as ss
+from bearingsim.signals import background as bgm
 from bearingsim.signals.background import BACKGROUND_DEFAULTS, Background
 from oracles.background_numpy import background_signal, random_background
 from bearingsim.dynamics import Realism
@@ -37,7 +38,7 @@ def test_vary_passes_equals_numpy_for_the_same_factors(npass, pad):
     tpp = np.concatenate([tp, np.full(pad, np.inf)])
     facp = np.concatenate([fac, rng.uniform(0, 2, pad)])    # padded slots: anything, never used
     shp = np.concatenate([sh, rng.normal(0, 1e-3, pad)])
-    got = jax.jit(ss.vary_passes, static_argnums=1)(x, FS, tpp, facp, shp)
+    got = jax.jit(pv.vary_passes, static_argnums=1)(x, FS, tpp, facp, shp)
     # same formulas, summation order differs: a few ulps of the record
     assert rel_err(got, ref) < 1e-12
 
@@ -45,20 +46,20 @@ def test_vary_passes_equals_numpy_for_the_same_factors(npass, pad):
 def test_pass_draws_have_their_stated_statistics():
     key = jax.random.PRNGKey(3)
     n, cv = 200_000, 0.3
-    f = np.asarray(ss.pass_factors(key, n, cv))
+    f = np.asarray(pv.pass_factors(key, n, cv))
     se = 1.0 / np.sqrt(n)
     # log-normal exp(s xi - s^2): E f^2 = 1, c.v. = sqrt(exp(s^2) - 1) = cv
     assert np.mean(f * f) == pytest.approx(1.0, abs=8 * se * np.sqrt(np.var(f * f)))
     assert np.std(f) / np.mean(f) == pytest.approx(cv, rel=0.02)
-    assert np.all(np.asarray(ss.pass_factors(key, 10, 0.0)) == 1.0)
+    assert np.all(np.asarray(pv.pass_factors(key, 10, 0.0)) == 1.0)
     p = 0.37
-    m = np.asarray(ss.strike_factors(key, n, p))
+    m = np.asarray(pv.strike_factors(key, n, p))
     assert set(np.unique(m)) == {0.0, 1.0}
     assert m.mean() == pytest.approx(p, abs=5 * np.sqrt(p * (1 - p) / n))        # binomial, 5 sigma
     tp = np.concatenate([0.01 + 0.0093 * np.arange(10), np.full(5, np.inf)])
-    sh = np.stack([np.asarray(ss.pass_shifts(k, jnp.asarray(tp), 0.05)) for k in jax.random.split(key, 4000)])
+    sh = np.stack([np.asarray(pv.pass_shifts(k, jnp.asarray(tp), 0.05)) for k in jax.random.split(key, 4000)])
     assert np.std(sh) == pytest.approx(0.05 * 0.0093, rel=0.03)               # 64000 normals: 0.3 % s.e.
-    assert np.all(np.asarray(ss.pass_shifts(key, jnp.asarray([0.01, np.inf]), 0.05)) == 0.0)   # one pass
+    assert np.all(np.asarray(pv.pass_shifts(key, jnp.asarray([0.01, np.inf]), 0.05)) == 0.0)   # one pass
 
 
 # --- background -----------------------------------------------------------------------------
@@ -75,7 +76,7 @@ def replay_draws(rng, bg, n, fs, knock_max):
     signs = rng.choice([-1.0, 1.0], m)
     assert m <= knock_max
     pad = knock_max - m
-    return ss.BackgroundDraws(sp, lp, noise, mp, lmp, np.concatenate([times, np.zeros(pad)]),
+    return bgm.BackgroundDraws(sp, lp, noise, mp, lmp, np.concatenate([times, np.zeros(pad)]),
                               np.concatenate([signs, np.zeros(pad)]))
 
 
@@ -89,7 +90,7 @@ def test_background_synthesis_equals_numpy_for_the_same_draws(seed):
     rng.bit_generator.state = state
     draws = replay_draws(rng, bg, n, FS, 60)
     assert np.count_nonzero(draws.knock_signs) > 3
-    got = jax.jit(ss.synthesize_background, static_argnums=2)(
+    got = jax.jit(bgm.synthesize_background, static_argnums=2)(
         Background(*(jnp.asarray(v, jnp.float64) for v in bg)), draws, FS, 29.7)
     assert rel_err(got, ref) < 1e-10
 
@@ -100,16 +101,16 @@ def test_white_machine_background_equals_numpy_and_labels():
     rng = np.random.default_rng(7)
     ref = background_signal(rng, n, FS, 25.0, bg)
     draws = replay_draws(np.random.default_rng(7), bg, n, FS, 20)
-    got = ss.synthesize_background(Background(*(jnp.asarray(v, jnp.float64) for v in bg)), draws, FS, 25.0)
+    got = bgm.synthesize_background(Background(*(jnp.asarray(v, jnp.float64) for v in bg)), draws, FS, 25.0)
     assert rel_err(got, ref) < 1e-10
-    lab = {k: float(v) for k, v in ss.background_labels(bg).items()}
+    lab = {k: float(v) for k, v in bgm.background_labels(bg).items()}
     assert lab == pytest.approx(bg.as_labels(), rel=1e-14)
 
 
 @pytest.fixture(scope="module")
 def drawn():
     keys = jax.random.split(jax.random.PRNGKey(11), 4000)
-    return jax.jit(jax.vmap(lambda k: ss.draw_background(k, FS)))(keys)
+    return jax.jit(jax.vmap(lambda k: bgm.draw_background(k, FS)))(keys)
 
 
 def test_drawn_backgrounds_are_in_their_ranges(drawn):
@@ -139,12 +140,12 @@ def test_drawn_backgrounds_are_in_their_ranges(drawn):
     assert b["knock_frequency"].min() >= 1000.0 and b["knock_frequency"].max() <= min(5500.0, top) * (1 + 1e-12)
     assert b["knock_damping"].min() >= 0.01 and b["knock_damping"].max() <= 0.08
     # PSD: the tilt and 1-4 bumps of <= 25 dB over a tilt within -6..3 dB/octave
-    g = ss.psd_grid(FS)
+    g = bgm.psd_grid(FS)
     lv = b["psd_levels_db"] - b["psd_levels_db"][:, :1]
     octaves = np.log2(g / g[0])
     assert np.all(lv <= 3.0 * octaves + 10 * np.log10(1 + 4 * 10 ** 2.5) + 1e-9)
     assert np.all(lv >= -6.0 * octaves - 10 * np.log10(1 + 4 * 10 ** 2.5) - 1e-9)
-    lab = jax.vmap(ss.background_labels)(drawn)
+    lab = jax.vmap(bgm.background_labels)(drawn)
     shaft_rms = np.sqrt(0.5 * np.sum(b["shaft_amplitudes"] ** 2, 1))
     assert np.allclose(lab["background_shaft_rms_m_s2"], shaft_rms, rtol=1e-14)
 
@@ -152,8 +153,8 @@ def test_drawn_backgrounds_are_in_their_ranges(drawn):
 def test_drawn_background_lines_sit_at_their_drawn_frequencies_and_amplitudes():
     n = int(FS)                          # 1 s: 1 Hz bins, every line on a bin
     key = jax.random.PRNGKey(5)
-    bg = ss.draw_background(key, FS)._replace(noise_rms=0.0, knock_amplitude=0.0)
-    x = np.asarray(ss.background_record(jax.random.PRNGKey(6), bg, n, FS, 31.0, 4))
+    bg = bgm.draw_background(key, FS)._replace(noise_rms=0.0, knock_amplitude=0.0)
+    x = np.asarray(bgm.background_record(jax.random.PRNGKey(6), bg, n, FS, 31.0, 4))
     A = np.abs(np.fft.rfft(x)) * 2 / n
     lines = {31 * k: a for k, a in enumerate(np.asarray(bg.shaft_amplitudes), 1)}
     lf = int(bg.line_frequency)
@@ -172,7 +173,7 @@ def test_modulation_depth_shows_in_the_squared_record():
     t = np.arange(n) / FS
     ratios = []
     for k in jax.random.split(jax.random.PRNGKey(0), 16):
-        y = np.asarray(ss.background_record(k, bg, n, FS, fr, 1)) ** 2
+        y = np.asarray(bgm.background_record(k, bg, n, FS, fr, 1)) ** 2
         c, s = 2 * np.mean(y * np.cos(2 * np.pi * fr * t)), 2 * np.mean(y * np.sin(2 * np.pi * fr * t))
         ratios.append(np.hypot(c, s) / np.mean(y))
     # per record the s.e. of c, s is ~ 2 sqrt(2 / n) = 0.026; over 16 records 0.0065
@@ -182,7 +183,7 @@ def test_modulation_depth_shows_in_the_squared_record():
 def test_knock_counts_are_poisson():
     bg = Background((), 60.0, (), 0.0, (), (), (), 20.0, 1.0, 3000.0, 0.05, ())
     n, kmax = 4800, 30                   # P(Poisson(8) > 30) < 1e-9: no count truncated
-    d = jax.vmap(lambda k: ss.background_draws(k, bg, n, FS, kmax))(jax.random.split(jax.random.PRNGKey(2), 20000))
+    d = jax.vmap(lambda k: bgm.background_draws(k, bg, n, FS, kmax))(jax.random.split(jax.random.PRNGKey(2), 20000))
     counts = np.count_nonzero(np.asarray(d.knock_signs), axis=1)
     lam = 20.0 * n / FS                  # 8 per record
     assert counts.mean() == pytest.approx(lam, abs=5 * np.sqrt(lam / counts.size))
@@ -212,15 +213,15 @@ def test_modes_discretised_in_jax_equal_scipy_and_filter_equals_apply_sensor():
 
 def test_measurement_noise_has_its_rms_and_band():
     key = jax.random.PRNGKey(4)
-    x = np.asarray(ss.measurement_noise(key, 4800, 0.7, 48000.0, (500.0, 5000.0)))
+    x = np.asarray(sensor.measurement_noise(key, 4800, 0.7, 48000.0, (500.0, 5000.0)))
     assert np.sqrt(np.mean(x * x)) == pytest.approx(0.7, rel=1e-12)
     X = np.abs(np.fft.rfft(x))
     f = np.fft.rfftfreq(4800, 1 / 48000.0)
     out = (f < 500.0) | (f > 5000.0)
     assert X[out].max() < 1e-12 * X[~out].max()
-    w = np.asarray(ss.measurement_noise(key, 4800, 0.7))
+    w = np.asarray(sensor.measurement_noise(key, 4800, 0.7))
     assert np.sqrt(np.mean(w * w)) == pytest.approx(0.7, rel=1e-12) and abs(np.mean(w)) < 5 * 0.7 / np.sqrt(4800)
-    assert np.array_equal(w, np.asarray(ss.measurement_noise(key, 4800, 0.7)))
+    assert np.array_equal(w, np.asarray(sensor.measurement_noise(key, 4800, 0.7)))
 
 
 @pytest.mark.parametrize("snr", [-7.5, 0.0, 12.3, 25.0])
@@ -340,9 +341,9 @@ def test_finish_items_varies_passes_like_numpy_then_runs_the_item_modes():
         tp = inp["pass_times"][i]
         P = tp.size
         kp = jax.random.split(ss.stream_key(keys[i], "passes"))
-        fac = np.array(ss.pass_factors(kp[0], P + 1, st.pass_cv_max * u))
-        sh = np.asarray(ss.pass_shifts(kp[1], jnp.asarray(tp), st.pass_delay_max * u))
-        fac[1:] *= np.asarray(ss.strike_factors(ss.stream_key(keys[i], "strike"), P, p))
+        fac = np.array(pv.pass_factors(kp[0], P + 1, st.pass_cv_max * u))
+        sh = np.asarray(pv.pass_shifts(kp[1], jnp.asarray(tp), st.pass_delay_max * u))
+        fac[1:] *= np.asarray(pv.strike_factors(ss.stream_key(keys[i], "strike"), P, p))
         fin = np.isfinite(tp)
         k = int(fin.sum())
         if u > 0 or p < 1:

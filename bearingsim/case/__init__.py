@@ -52,7 +52,7 @@ from ..physics.shaft import BearingSet, preload_class_force
 from .files import case_path, parse_toml, read_case_text, shipped_cases, shipped_cases_dir
 from .messages import fmt_value, suggest
 from .reference import schema_reference_markdown
-from .sampling import characteristic_frequencies, check_sampling
+from .sampling import check_sampling, highest_frequency, nominal_frequencies
 from .schema import OPTIONAL, REQUIRED, SCHEMA, Key, Section, all_keys, lookup, si_name, split_key, unit_of
 from .sets import set_layout
 from .toml_writer import to_toml
@@ -76,7 +76,7 @@ __all__ = [
     "shipped_cases_dir",
     "unit_of",
     "check_sampling",
-    "characteristic_frequencies",
+    "nominal_frequencies", "highest_frequency",
     "to_toml",
     "schema_reference_markdown",
 ]
@@ -198,7 +198,7 @@ class Case:
 
     @property
     def is_set(self) -> bool:
-        """True when the case describes a shaft on several bearings ([set], MODEL.md 10)."""
+        """True when the case describes a shaft on several bearings ([set], docs/model.md section 10)."""
         return "set" in self.data
 
     def _bearing_from(self, path: str):

@@ -3,30 +3,34 @@ frequency of the case (shaft, FTF, BPFO, BPFI, BSF, 2 BSF) cannot show the defec
 refused, naming the keys and the minimum rate."""
 from __future__ import annotations
 
-from ..physics.kinematics import defect_frequencies
+from ..physics.kinematics import DefectFrequencies, defect_frequencies
 from .messages import fmt_num
 from .units import from_si, to_si
 from .validation import CaseError
 
-__all__ = ["characteristic_frequencies", "check_sampling"]
+__all__ = ["nominal_frequencies", "highest_frequency", "check_sampling"]
 
-_NAMES = {"ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf": "BSF", "two_bsf": "2 BSF"}
+_NAMES = {"shaft": "shaft", "ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf": "BSF", "two_bsf": "2 BSF"}
 
 
-def characteristic_frequencies(case, speed_rpm=None) -> dict:
-    """Shaft and defect frequencies (Hz) of the case at ``speed_rpm`` (default: the case's
-    ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
+def nominal_frequencies(case, speed_rpm=None) -> DefectFrequencies:
+    """Shaft and defect frequencies (Hz, floats) of the case at ``speed_rpm`` (default: the
+    case's ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
     n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
     shaft = from_si(to_si(n, "rpm"), "rev_s")
-    f = defect_frequencies(case.bearing(), shaft)
-    return {"shaft": shaft, **{label: float(getattr(f, k)) for k, label in _NAMES.items()}}
+    return DefectFrequencies(*(float(v) for v in defect_frequencies(case.bearing(), shaft)))
+
+
+def highest_frequency(f: DefectFrequencies) -> tuple[str, float]:
+    """(name, Hz) of the highest of shaft, FTF, BPFO, BPFI, BSF and 2 BSF."""
+    return max(((label, float(getattr(f, k))) for k, label in _NAMES.items()), key=lambda kv: kv[1])
 
 
 def check_sampling(case, speed_rpm=None, speed_key="operation.speed_rpm"):
     """Raise CaseError when ``dynamics.sample_rate_Hz`` is below twice the highest characteristic
     frequency at ``speed_rpm`` (default the case's speed; ``speed_key`` names where it comes from)."""
     n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
-    name, f = max(characteristic_frequencies(case, n).items(), key=lambda kv: kv[1])
+    name, f = highest_frequency(nominal_frequencies(case, n))
     fs = case.get("dynamics.sample_rate_Hz")
     if fs < 2.0 * f:
         raise CaseError(case.source, [

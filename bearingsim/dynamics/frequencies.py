@@ -1,4 +1,4 @@
-"""The defect frequencies of a run at its quasi-static state (MODEL.md section 8), written once
+"""The defect frequencies of a run at its quasi-static state (docs/model.md section 8), written once
 in JAX: :func:`state_frequencies` (one state; jit/vmap, inside a data set chunk's program) and
 :func:`characteristic_frequencies` (its host values for one state or a batch)."""
 from __future__ import annotations
@@ -7,15 +7,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..physics.kinematics import defect_frequencies
+from ..physics.kinematics import DefectFrequencies, defect_frequencies
 
 __all__ = ["state_frequencies", "characteristic_frequencies", "spin_ratio"]
 
 
 def state_frequencies(bearing, speed, sol):
-    """(dict of Hz, mean loaded contact angle (rad), spin ratio) of one quasi-static state
+    """(:class:`DefectFrequencies` in Hz, mean loaded contact angle (rad), spin ratio) of one quasi-static state
     ``sol`` at shaft ``speed`` (rad/s): shaft = n/60; FTF = omega_c / 2 pi from the state's cage
-    speed, BPFO = Z FTF; BPFI and BSF (once per ball revolution) from the MODEL.md section 8
+    speed, BPFO = Z FTF; BPFI and BSF (once per ball revolution) from the docs/model.md section 8
     formulas at the mean loaded contact angle (mean of (alpha_i + alpha_o)/2 over the balls with
     Q_i > 1 % of the largest; every ball when none is loaded); the spin ratio omega_R / omega =
     2 pi BSF / omega at that angle (0 where it is not finite).  jit/vmap."""
@@ -29,24 +29,24 @@ def state_frequencies(bearing, speed, sol):
     ftf = sol.cage_speed / (2 * np.pi)
     k = defect_frequencies(bearing, 1.0, a_m).bsf
     k = jnp.where(jnp.isfinite(k), k, 0.0)
-    return dict(shaft_Hz=shaft, ftf_Hz=ftf, bpfo_Hz=bearing.n_balls * ftf, bpfi_Hz=f.bpfi, bsf_Hz=f.bsf), a_m, k
+    return DefectFrequencies(shaft, ftf, bearing.n_balls * ftf, f.bpfi, f.bsf), a_m, k
 
 
 def characteristic_frequencies(bearing, op, sol):
-    """:func:`state_frequencies` on the host: (dict, mean loaded contact angle in rad), floats
-    for one state, arrays for a batch (``sol`` and ``op.speed`` with a leading item axis)."""
+    """:func:`state_frequencies` on the host: (:class:`DefectFrequencies`, mean loaded contact
+    angle in rad), floats for one state, arrays for a batch (``sol`` and ``op.speed`` with a leading item axis)."""
     speed = jnp.asarray(op.speed, jnp.float64)
     Qi = jnp.asarray(sol.Q_inner)
     if Qi.ndim == 1:
         f, a_m, _ = state_frequencies(bearing, speed, sol)
-        return {k: float(v) for k, v in f.items()}, float(a_m)
+        return DefectFrequencies(*(float(v) for v in f)), float(a_m)
     f, a_m, _ = jax.vmap(lambda w, s: state_frequencies(bearing, w, s))(jnp.broadcast_to(speed, Qi.shape[:1]), sol)
-    return {k: np.asarray(v, float) for k, v in f.items()}, np.asarray(a_m, float)
+    return DefectFrequencies(*(np.asarray(v, float) for v in f)), np.asarray(a_m, float)
 
 
 def spin_ratio(bearing, contact_angle):
     """omega_R / omega: a ball's spin speed relative to the cage per unit shaft speed (2 pi BSF
-    / omega, MODEL.md section 8) at the mean loaded contact angle (rad; a float or an array)."""
+    / omega, docs/model.md section 8) at the mean loaded contact angle (rad; a float or an array)."""
     r = np.asarray(defect_frequencies(bearing, 1.0, jnp.asarray(contact_angle, jnp.float64)).bsf, float)
     r = np.where(np.isfinite(r), r, 0.0)
     return float(r) if r.ndim == 0 else r

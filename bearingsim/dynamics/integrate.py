@@ -8,13 +8,13 @@ in x, trapezoidal in v for the (linear) damping -- one bearing-force evaluation 
 order.  A ball crossing a rectangular defect edge inside a step (times known in advance from the
 motion, :func:`bearingsim.dynamics.defect_edge_times`) is integrated exactly: the force step
 weights the velocity update by where it falls (theta, 1 - theta instead of 1/2, 1/2) and the
-sensor modes see a step at that instant (:func:`bearingsim.signals.sensor.filter_update`), so an edge
+sensor modes see a step at that instant (:func:`bearingsim.dynamics.sensor.filter_update`), so an edge
 costs nothing extra (no step rejection, no lax.cond: batches stay in lockstep).  ``"heun"`` /
 ``"rk4"`` are explicit Runge-Kutta alternatives without edge handling (first order at
 rectangular edges).  The state at each step's start gives the outputs and the sensor filter's
 input at no extra cost.
 
-The sensor path (one or more structural modes, :mod:`bearingsim.signals.sensor`) is linear and one-way
+The sensor path (one or more structural modes, :mod:`bearingsim.dynamics.sensor`) is linear and one-way
 coupled: it is applied exactly to the housing acceleration ``a_h,x`` on the step grid
 (first-order-hold discretisation), not integrated, so it never limits the step.
 
@@ -31,13 +31,13 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from ..signals import sensor as sensor_mod
+from . import sensor as sensor_mod
 from ..errors import InputError
 from ..programs import jit
 from ..xla import compiler_options
 from .ball_force import initial_ball_carry
 from .model import DynamicModel
-from .motion import Motion, device_motion_of, motion_at, motion_at_device
+from .motion import Motion, motion_at, pad_knots
 
 __all__ = ["SCHEMES", "CHUNK", "check_scheme", "time_grid", "run_fixed", "precompile_fixed", "run_adaptive",
            "stage_grid", "motion_stages", "edge_fractions", "advance_record"]
@@ -133,7 +133,7 @@ _advance_jit = jit(_advance)
 
 def _advance_device(model, carry, m, edges, k0, h, flt, scheme, substeps, fs, record, chord):
     """:func:`_advance` over samples k0..k0+CHUNK-1 with the stage and jump arrays built in the
-    program from the :class:`DeviceMotion` ``m`` and the padded edge times (no host arrays per
+    program from the :class:`Motion` ``m`` and the padded edge times (no host arrays per
     chunk)."""
     Z = model.bearing.n_balls
     stages = motion_stages(m, Z, k0, CHUNK, fs, scheme, substeps)
@@ -162,12 +162,12 @@ def stage_grid(scheme, substeps):
 
 
 def motion_stages(m, Z, k0, n, fs, scheme, substeps):
-    """The motion of the :class:`DeviceMotion` ``m`` (cage angle, shaft angle, shaft speed) at
+    """The motion of the :class:`Motion` ``m`` (cage angle, shaft angle, shaft speed) at
     the stage points of samples k0..k0+n-1 (jit/vmap; ``n``, ``scheme``, ``substeps`` static;
     ``k0`` may be traced): (n, S, n_c, 3)."""
     grid = jnp.asarray(_stage_grid(scheme, substeps))
     t = (k0 + jnp.arange(n, dtype=jnp.float64)[:, None, None] + grid[None]) / fs
-    return jnp.stack(motion_at_device(m, Z, t), axis=-1)
+    return jnp.stack(motion_at(m, Z, t), axis=-1)
 
 
 def edge_fractions(edges, k0, n, substeps, h):
@@ -197,7 +197,7 @@ def time_grid(duration, sample_rate):
 
 
 def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, rec0=None, ball_solver="full"):
-    """Chunked fixed-step integration of one model: its ``motion`` (a host :class:`Motion`) and
+    """Chunked fixed-step integration of one model: its drawn :class:`Motion` ``motion`` and
     the rectangular defects' edge times ``edges``; the stages and jumps of each chunk are built
     on the device from the motion (the data set's chunk program builds them the same way, for
     the whole record).  Returns host arrays y (T, 10), a_h (T, 2), sensor (T,), the number of
@@ -221,7 +221,7 @@ def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, 
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
-    md = device_motion_of(motion, T / fs, 256)
+    md = pad_knots(motion, 256)
     e = np.asarray(edges, float)
     edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):
@@ -290,7 +290,7 @@ def run_adaptive(model, y0, m: Motion, ts, jumps, rtol, atol, coupling):
 
     def full(t, u):
         y = u * scale
-        st = jnp.stack(motion_at(mj, t, jnp))
+        st = jnp.stack(motion_at(mj, model.bearing.n_balls, t))
         zk, vk = y[10:10 + M], y[10 + M:]
         Fk = mr * (w * w * zk + 2 * zz * w * vk)
         dy = model.rhs(y[:10], st, jnp.sum(Fk))

@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from ..signals import sensor as sensor_mod
+from . import sensor as sensor_mod
 from ..physics.defect import LOCATIONS, Spall
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import solve_state
@@ -44,8 +44,8 @@ from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
 from .integrate import advance_record, check_scheme, edge_fractions, motion_stages
 from .frequencies import state_frequencies
 from .model import build_model, initial_state
-from .motion import (MOTION_STREAM, defect_times_device, draw_motion, knot_count, motion_at_device, motion_labels_device,
-                     motion_ok_device, pass_count)
+from .motion import (MOTION_STREAM, defect_times, draw_motion, knot_count, motion_at, motion_labels, motion_ok,
+                     pass_count)
 from .parameters import RESULTS, Realism
 
 __all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations"]
@@ -197,14 +197,14 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         centre = next((s.center for s in sp if s.location == "outer"), 0.0)
         m = draw_motion(jax.random.fold_in(key, MOTION_STREAM), Z, th, wc, o.speed, (T - 1) / fs, centre, realism,
                                n_knots)
-        st0 = jnp.stack(motion_at_device(m, Z, jnp.zeros(())), -1)
+        st0 = jnp.stack(motion_at(m, Z, jnp.zeros(())), -1)
         y0, ok, dy0, _ = initial_state(model, sol.displacement[:3], st0)
         if profile == "rectangular":
-            edges, e_ok = defect_times_device(m, Z, sp, k, T / fs, P, ("lo", "hi"))
+            edges, e_ok = defect_times(m, Z, sp, k, T / fs, P, ("lo", "hi"))
             edges = edges[:2 * P]
         else:
             edges, e_ok = jnp.full((1,), jnp.inf), jnp.bool_(True)
-        passes, p_ok = defect_times_device(m, Z, sp, k, (T - 1) / fs, P, ("mid",))
+        passes, p_ok = defect_times(m, Z, sp, k, (T - 1) / fs, P, ("mid",))
         passes = passes[:P]
         flt = sensor_mod.sensor_filter(fm, zm, gm, h)
         stages = motion_stages(m, Z, 0, T, fs, scheme, substeps)
@@ -213,13 +213,13 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         _, (ah, sens) = advance_record(model, carry, stages, jumps, h, flt, scheme, lean=True)
         code = jnp.where((sol.result != 0) | ~pit_ok, RESULTS.initial_state.value,
                          jnp.where(~ok, RESULTS.initial_equilibrium.value, 0))
-        fits = motion_ok_device(m, Z, T / fs) & e_ok & p_ok
+        fits = motion_ok(m, Z, T / fs) & e_ok & p_ok
         code = jnp.where((code == 0) & ~fits, RESULTS.fixed_size.value, code)
         code = jnp.where((code == 0) & (needed == 0), RESULTS.ball_solver.value, code)
         finite = jnp.all(jnp.isfinite(ah)) & jnp.all(jnp.isfinite(sens))
         code = jnp.where((code == 0) & ~finite, RESULTS.nonfinite.value, code)
         good = code == 0
-        lab = motion_labels_device(m)
+        lab = motion_labels(m)
         return dict(sensor=jnp.where(good, sens, 0.0), housing_acceleration=jnp.where(good, ah, 0.0),
                     result=code.astype(jnp.int32), pass_times=jnp.where(good, passes, jnp.inf),
                     pass_jitter_percent=lab["pass_jitter_percent"],
@@ -227,7 +227,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
 
     out = jax.vmap(one)(keys, op, loads, defects, sols, params, prep["spin_ratio"], theta0, f_m, z_m, g_m,
                         prep["needed"], prep["pit_ok"])
-    out.update({k: v for k, v in prep["freqs"].items()})
+    out.update(prep["freqs"].hz())
     out["contact_angle"] = prep["contact_angle"]
     for k_ in ("pit_depth", "unbridged", "pit_ok"):
         out[k_] = prep[k_]

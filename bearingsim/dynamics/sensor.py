@@ -1,4 +1,4 @@
-"""Sensor path (MODEL.md section 7): structural resonances driven by the housing acceleration,
+"""Sensor path (docs/model.md section 7): structural resonances driven by the housing acceleration,
 and measurement noise.
 
 The sensor sits on the housing behind one or more lightly damped structural modes.  Mode k

@@ -1,4 +1,4 @@
-"""One dynamic simulation (MODEL.md section 7): :func:`simulate` and its
+"""One dynamic simulation (docs/model.md section 7): :func:`simulate` and its
 :class:`DynamicsResult`.  The model is in :mod:`bearingsim.dynamics.model`, the ball forces in
 :mod:`~bearingsim.dynamics.ball_force`, the drawn motion in :mod:`~bearingsim.dynamics.motion`,
 the time loop in :mod:`~bearingsim.dynamics.integrate`.
@@ -19,9 +19,9 @@ from ..physics.defect import Spall, as_defects
 from ..errors import InputError
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import result_hint, solve
-from ..physics.kinematics import Operation
-from ..signals.sensor import measurement_noise
-from ..signals.signal_stage import SignalSettings, pass_variability
+from ..physics.kinematics import DefectFrequencies, Operation
+from .passes import PassSettings, pass_variability
+from .sensor import measurement_noise
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
@@ -29,8 +29,8 @@ from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_
 from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
 from ..keys import item_keys, stream_key
-from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, host_motion_of, knot_count,
-                     motion_at, motion_labels)
+from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, motion_at,
+                     run_labels)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "slip_reference",
@@ -82,7 +82,7 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
 def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, fs):
     """A simulation's sensor record after the time loop, as a data set item's signal stage makes
     it (:mod:`bearingsim.signals.signal_stage`, every draw from the run's ``key``): the
-    pass-to-pass variability of a pit's impacts (:func:`~bearingsim.signals.signal_stage.pass_variability`:
+    pass-to-pass variability of a pit's impacts (:func:`~bearingsim.dynamics.passes.pass_variability`:
     c.v. and delay s.d. the realism's maxima times the pit's ``unbridged`` fraction; the housing
     acceleration ``housing`` (T,) varied pass by pass and put through the sensor ``modes`` (f, zeta,
     g) again; displacements and housing acceleration stay the ODE's) and the measurement noise
@@ -97,8 +97,8 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
         n = int(np.size(pass_times))
         P = max(n, 1 << max(n, 1).bit_length())          # a few padded shapes: one program per power of two
         tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
-        st = SignalSettings(float(fs), T, pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
-                            pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
+        st = PassSettings(float(fs), pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
+                          pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
         a, fac, shifts, cv, jit_ = pass_variability(jnp.asarray(key, jnp.uint32), jnp.asarray(housing, jnp.float64),
                                                     jnp.asarray(sensor, jnp.float64), jnp.asarray(tp),
                                                     jnp.float64(unbridged), jnp.stack([jnp.asarray(v, jnp.float64)
@@ -133,7 +133,7 @@ class DynamicsResult(NamedTuple):
     alpha_outer: np.ndarray
     result: int                         # RESULTS code (0 = successful)
     num_steps: int
-    frequencies: dict                   # shaft/ftf/bpfo/bpfi/bsf in Hz (nominal speed)
+    frequencies: DefectFrequencies      # shaft, ftf, bpfo, bpfi, bsf in Hz (nominal speed)
     contact_angle: float                # rad, mean loaded contact angle (quasi-static)
     jump_times: np.ndarray              # defect entry/exit times (rectangular profile) (s)
     pass_times: np.ndarray              # times a ball meets a defect's centre (s)
@@ -191,13 +191,12 @@ def _draw_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n
 _draw_from_key_jit = jit(_draw_from_key)
 
 
-def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots, seed):
+def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots):
     wc = omega_c if np.isfinite(omega_c) and omega_c > 0 else 0.0
     if n_knots is None:
         n_knots = knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
-    dm = _draw_from_key_jit(jnp.asarray(key, jnp.uint32), Z, jnp.float64(theta0), jnp.float64(wc),
-                            jnp.float64(omega0), float(duration), jnp.float64(center), realism, int(n_knots))
-    return host_motion_of(dm, Z, seed)
+    return _draw_from_key_jit(jnp.asarray(key, jnp.uint32), Z, jnp.float64(theta0), jnp.float64(wc),
+                              jnp.float64(omega0), float(duration), jnp.float64(center), realism, int(n_knots))
 
 
 def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
@@ -206,7 +205,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
              scheme="newmark", substeps="auto", ball_iterations="auto", record_balls=True,
              integrator="fixed", rtol=1e-8, atol=1e-8, sensor_coupling=False, progress=None,
              throw=True, ball_solver="chord", key=None, n_knots=None) -> DynamicsResult:
-    """Time simulation of MODEL.md section 7 (the model: :mod:`bearingsim.dynamics.model`).
+    """Time simulation of docs/model.md section 7 (the model: :mod:`bearingsim.dynamics.model`).
 
     ``loads`` [Fx, Fy, Fz, Mx, My] (N, N m), ``spall`` None (healthy), a :class:`Spall` on the
     outer or inner raceway or a ball, or a tuple of them (at t = 0: an inner spall then turns
@@ -266,14 +265,15 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             code = code or RESULTS.ball_solver
     model = build_model(bearing, op, loads, defects, sol, params, curve, int(ball_iterations), k_spin)
     key = item_keys(seed, [0])[0] if key is None else key
-    m = _motion_from_key(key, bearing.n_balls, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
-                         slip_reference(defects), realism, n_knots, seed)
-    st0 = jnp.asarray(np.stack(motion_at(m, np.zeros(1)), -1)[0])
+    Z = bearing.n_balls
+    m = _motion_from_key(key, Z, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
+                         slip_reference(defects), realism, n_knots)
+    st0 = jnp.stack(motion_at(m, Z, jnp.zeros(())), -1)
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
         substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
     substeps = int(substeps)
-    jumps = defect_edge_times(m, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
+    jumps = defect_edge_times(m, Z, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
     pre = None
     if integrator == "fixed" and code == RESULTS.successful:
         # the time loop's program compiles on another core while the equilibrium's does
@@ -304,7 +304,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         extra = f" (quasi-static: {sol.message()[0]}, result {q_code})" if q_code else ""
         hint = result_hint(q_code, loads, bearing=bearing) if q_code else code.hint
         raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", hint, code)
-    theta, phi, omega = motion_at(m, ts)
+    theta, phi, omega = (np.asarray(v) for v in motion_at(m, Z, jnp.asarray(ts)))
     rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
     balls = [None] * 4
     if record_balls and code == RESULTS.successful:
@@ -312,9 +312,9 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             balls = list(record_loads_angles(recs))
         else:
             balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
-    labels = motion_labels(m, realism)
+    labels = run_labels(m, realism, seed)
     labels["ball_solver_error"] = float(err)
-    pass_times = defect_pass_times(m, defects, ts[-1], k_spin)
+    pass_times = defect_pass_times(m, Z, defects, ts[-1], k_spin)
     noise = np.zeros(T)
     if code == RESULTS.successful:
         sens, noise, more = finish_record(key, ah[:, 0], sens, pass_times, u, params.modes(), realism, fs)

@@ -1,4 +1,4 @@
-"""The per-ball Jones kernel (MODEL.md sections 3-5): one home for the ball equations.
+"""The per-ball Jones kernel (docs/model.md sections 3-5): one home for the ball equations.
 
 Everything here is about one ball (vmapped over balls by the callers):
 
@@ -16,12 +16,12 @@ Everything here is about one ball (vmapped over balls by the callers):
 * :func:`balls_at` -- every ball in equilibrium for a given q (the load-displacement map), and
   :func:`reactions_from_balls` -- the loads [Fx, Fy, Fz, Mx, My] they put on the inner ring.
 
-Contact rule (MODEL.md section 3): a contact carries Q = K delta^1.5 only when delta > 0 AND its
+Contact rule (docs/model.md section 3): a contact carries Q = K delta^1.5 only when delta > 0 AND its
 normal points into its raceway (cos alpha > 0).  A ball pushed past the inner groove-curvature
 centre (deep spall) has lost its inner contact; it never acts as a tie.
 
 A ball that has lost its inner contact over a defect is carried by the cage: its orbital speed
-(hence F_c and M_g) is that of its undropped position (same q, no defect), MODEL.md section 5.
+(hence F_c and M_g) is that of its undropped position (same q, no defect), docs/model.md section 5.
 
 Units: SI inside the physics; the solvers' unknowns are micrometres (``UM``) and residuals kN
 (``KN``) so that one tolerance fits every ball.
@@ -34,6 +34,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
+from .newton import inverse2, solve2  # noqa: F401  (re-exported: jones and shaft take them from here)
 from ..fastmath import clamp, norm2, pow15, recip, safe_div
 from .hertz import power_eval
 from .kinematics import Operation, ball_kinematics_cs
@@ -165,7 +166,7 @@ def _contacts(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
     delta_i = Li - (bearing.f_inner - 0.5) * D - H_inner
     K_i = power_eval(curve.inner_power, ci)
     K_o = power_eval(curve.outer_power, co)
-    # MODEL.md section 3: load only with overlap AND a normal that points into the raceway
+    # docs/model.md section 3: load only with overlap AND a normal that points into the raceway
     Q_i = K_i * _pow15((delta_i > 0.0) & (ci > 0.0), delta_i)
     Q_o = K_o * _pow15((delta_o > 0.0) & (co > 0.0), delta_o)
     return _Contacts(so, co, si, ci, delta_i, delta_o, K_i, K_o, Q_i, Q_o)
@@ -176,7 +177,7 @@ def _forces(bearing, op: Operation, c: _Contacts, H_outer, H_inner, carried_spee
     D = bearing.ball_diameter
     sb, cb, wm, _, Fc, Mg = ball_kinematics_cs(bearing, op, c.si, c.ci, c.so, c.co)
     if carried_speed is not None:
-        # not driven by the inner ring over a defect: the cage carries it (MODEL.md 5)
+        # not driven by the inner ring over a defect: the cage carries it (docs/model.md section 5)
         carried = (c.Q_i <= 0.0) & ((H_outer + H_inner) > 0.0)
         ratio = carried_speed * recip(jnp.where(wm != 0.0, wm, 1.0))
         scale = jnp.where(carried & (wm != 0.0), ratio * ratio, 1.0)
@@ -347,27 +348,6 @@ def ball_newton_step(bearing, op, A1, A2, curve, H_outer, H_inner, carried_speed
     return f, step
 
 
-def solve2(J, r):
-    """J^-1 r for 2x2 J (batched on leading axes), regularised where J is singular (a ball with
-    no contact at rest: J = 0 and r = 0 give a zero step)."""
-    a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
-    scale = jnp.maximum(jnp.maximum(jnp.abs(a), jnp.abs(b)), jnp.maximum(jnp.abs(c), jnp.abs(d)))
-    mu = 1e-13 * scale + 1e-300
-    a, d = a + mu, d + mu
-    det = a * d - b * c
-    det = jnp.where(jnp.abs(det) > 1e-300, det, 1e-300)
-    x0 = (d * r[..., 0] - b * r[..., 1]) / det
-    x1 = (a * r[..., 1] - c * r[..., 0]) / det
-    return jnp.stack([x0, x1], axis=-1)
-
-
-def inverse2(J):
-    """Regularised inverse of 2x2 matrices (batched on leading axes), as :func:`solve2`."""
-    eye = jnp.eye(2)
-    cols = [solve2(J, jnp.broadcast_to(eye[k], J.shape[:-1])) for k in range(2)]
-    return jnp.stack(cols, axis=-1)
-
-
 def solve_ball_fixed(bearing, op, A1, A2, curve, H_outer=0.0, H_inner=0.0, carried_speed=None,
                      iterations=3, x_init=None):
     """Ball centre (m) after a fixed number of Newton steps from the omega = 0 closed form (or
@@ -450,7 +430,7 @@ def balls_at(bearing, op, q, psi, curve, H_outer=None, H_inner=None, x_init=None
 
 
 def reactions_from_balls(st: BallState, psi):
-    """Loads [Fx, Fy, Fz, Mx, My] (N, N m) the balls put on the inner ring (MODEL.md section 4)."""
+    """Loads [Fx, Fy, Fz, Mx, My] (N, N m) the balls put on the inner ring (docs/model.md section 4)."""
     c, s = jnp.cos(psi), jnp.sin(psi)
     return jnp.stack([jnp.sum(st.ball_H * c), jnp.sum(st.ball_H * s), jnp.sum(st.ball_G),
                       jnp.sum(st.ball_moment * s), -jnp.sum(st.ball_moment * c)])

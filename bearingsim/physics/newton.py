@@ -26,7 +26,8 @@ import jax.numpy as jnp
 import numpy as np
 
 __all__ = ["LS_STEPS", "FREE_STEPS", "RING_CAP", "BALL_CAP", "NEWTON_FAILURES", "traced_tolerances",
-           "max_abs", "cap_step", "accept_step", "step_status", "better", "converged_only", "retry_failed"]
+           "max_abs", "cap_step", "accept_step", "step_status", "better", "converged_only", "retry_failed",
+           "solve2", "inverse2"]
 
 #: line-search halvings before a step is declared stalled
 LS_STEPS = 12
@@ -128,3 +129,25 @@ def retry_failed(sol, run, take=better, bad=None):
         return a.at[idx].set(jnp.where(m, r, a[idx]))
 
     return jax.tree_util.tree_map(merge, sol, retry)
+
+
+# ------------------------------------------------------------ 2x2 solves (a ball's Newton step)
+def solve2(J, r):
+    """J^-1 r for 2x2 J (batched on leading axes), regularised where J is singular (a ball with
+    no contact at rest: J = 0 and r = 0 give a zero step)."""
+    a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
+    scale = jnp.maximum(jnp.maximum(jnp.abs(a), jnp.abs(b)), jnp.maximum(jnp.abs(c), jnp.abs(d)))
+    mu = 1e-13 * scale + 1e-300
+    a, d = a + mu, d + mu
+    det = a * d - b * c
+    det = jnp.where(jnp.abs(det) > 1e-300, det, 1e-300)
+    x0 = (d * r[..., 0] - b * r[..., 1]) / det
+    x1 = (a * r[..., 1] - c * r[..., 0]) / det
+    return jnp.stack([x0, x1], axis=-1)
+
+
+def inverse2(J):
+    """Regularised inverse of 2x2 matrices (batched on leading axes), as :func:`solve2`."""
+    eye = jnp.eye(2)
+    cols = [solve2(J, jnp.broadcast_to(eye[k], J.shape[:-1])) for k in range(2)]
+    return jnp.stack(cols, axis=-1)

@@ -9,7 +9,7 @@ Equal length.  The BPFO line of a squared-envelope spectrum is coherent and its 
 so "peak over median" grows with the record length (CWRU 130: 33 dB over 0.5 s, 41 dB over
 1 s, 59 dB over the whole 10 s).  Simulated records are short (~1 s), so the real records are
 measured on segments of the same length and the median over segments is the reference
-(:func:`segment_metrics`); the whole-record figures of reference-data.md are printed alongside.
+(:func:`segment_metrics`); the whole-record figures of docs/reference-data.md are printed alongside.
 """
 from __future__ import annotations
 
@@ -21,7 +21,8 @@ import numpy as np
 import scipy.signal as ss
 
 from ..errors import InputError
-from ..signals.envelope import RecordMetrics, record_metrics, squared_envelope
+from ..signals.envelope import squared_envelope
+from ..signals.lines import RecordMetrics, record_metrics
 
 __all__ = [
     "G",
@@ -40,7 +41,7 @@ __all__ = [
 
 #: standard gravity: the CWRU records are in g
 G = 9.80665
-#: published CWRU BPFO multiplier (reference-data.md)
+#: published CWRU BPFO multiplier (docs/reference-data.md)
 BPFO_ORDER = 3.5848
 
 #: real outer-race records at 6:00, 0 hp: (spall diameter in, fs) -> file stem
@@ -152,7 +153,7 @@ def smoothed_psd(x, fs, f_lo, f_hi, nperseg=None, smooth_hz=150.0):
 
 
 def sensor_response(f, frequencies, damping_ratios, gains):
-    """Transfer function of the sensor path (bearingsim.signals.sensor) from the housing acceleration:
+    """Transfer function of the sensor path (bearingsim.dynamics.sensor) from the housing acceleration:
     ``1 - sum_k g_k s^2 / (s^2 + 2 zeta_k w_k s + w_k^2)`` at ``s = 2 pi i f``."""
     s = 2j * np.pi * np.asarray(f, dtype=float)[:, None]
     w = 2 * np.pi * np.asarray(frequencies, dtype=float)[None, :]

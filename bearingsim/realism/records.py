@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import characteristic_frequencies
+from ..case import highest_frequency, nominal_frequencies
 from ..errors import InputError
 
 __all__ = ["UNITS", "MIN_SECONDS", "MIN_SAMPLE_RATE_HZ", "RECORD_SUFFIXES", "check_record", "read_record"]
@@ -62,7 +62,7 @@ def check_record(x, fs, what="record", case=None, max_rpm=None,
         if not bad and a.size > 1 and np.ptp(a) == 0:
             problems.append(f"{what}: all samples are equal (no signal)")
     if fs_ok and case is not None and max_rpm is not None and float(fs) >= MIN_SAMPLE_RATE_HZ:
-        top = max(characteristic_frequencies(case, max_rpm).values())
+        top = highest_frequency(nominal_frequencies(case, max_rpm))[1]
         if float(fs) < 2.0 * top:
             problems.append(f"{what}: sample rate {float(fs):g} Hz is below twice the bearing's highest "
                             f"defect frequency ({top:.1f} Hz at {max_rpm:g} rpm)")

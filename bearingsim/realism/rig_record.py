@@ -2,7 +2,7 @@
 ball contact, pass-to-pass impact variability, the 12 kHz acquisition, and the record pipeline.
 
 The engine (:mod:`bearingsim.dynamics`) supplies the housing acceleration, the spall pass times,
-the sensor modes (:mod:`bearingsim.signals.sensor`, applied exactly after the ODE), random slip, speed
+the sensor modes (:mod:`bearingsim.dynamics.sensor`, applied exactly after the ODE), random slip, speed
 fluctuation and measurement noise.  This module adds what the engine does not model:
 
 Pit under a contact (amplitude physics)
@@ -30,7 +30,7 @@ Pass-to-pass variability
     free and re-engages at the exit edge with the ball's momentary lateral position and spin.
     One fitted constant each: the [dynamics] keys ``pass_amplitude_cv_max_percent`` and
     ``pass_delay_sd_max_percent`` of the CWRU cases (the engine applies them,
-    :func:`bearingsim.signals.signal_stage.pass_variability`, to the sensor path of
+    :func:`bearingsim.dynamics.passes.pass_variability`, to the sensor path of
     :func:`bearingsim.dynamics.simulate` and of the data sets).
 
 Acquisition
@@ -52,8 +52,8 @@ from ..physics.pit import (  # noqa: F401  (re-exported: the record pipeline's v
     Contact, PIT_LOCATIONS, contact_of, contact_at, PitDepth, pit_load_fraction, pit_depth,
     pit_effective_depth, pit_depth_of_solution, unbridged_fraction, pit_unbridged_fraction, pass_cv)
 from ..keys import item_keys
-from ..signals.sensor import apply_sensor
-from ..signals.signal_stage import SignalSettings, pass_variability
+from ..dynamics.passes import PassSettings, pass_variability
+from ..dynamics.sensor import apply_sensor
 
 __all__ = [
     "Contact",
@@ -93,9 +93,9 @@ def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
     """(record in m/s^2, sample rate, labels) of a :class:`bearingsim.dynamics.DynamicsResult`.
 
     The housing acceleration (x) goes through the sensor modes of ``params``
-    (:func:`bearingsim.signals.sensor.apply_sensor`, exact first-order hold at the sample
+    (:func:`bearingsim.dynamics.sensor.apply_sensor`, exact first-order hold at the sample
     interval), with the pass-to-pass factors and delays of the signal stage
-    (:func:`bearingsim.signals.signal_stage.pass_variability`: factors of coefficient of variation
+    (:func:`bearingsim.dynamics.passes.pass_variability`: factors of coefficient of variation
     ``cv``, Gaussian delays of standard deviation ``jitter`` times the mean pass interval, both
     drawn from the key of item 0 of a run seeded ``seed``), and gets the run's own measurement
     noise (``result.noise``); then it is decimated to ``fs_out`` when given.  With ``cv = 0`` and
@@ -114,7 +114,7 @@ def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
     n = tp.size
     P = 1 << max(n, 1).bit_length()                     # a few padded shapes: one program per power of two
     tpp = np.concatenate([tp, np.full(P - n, np.inf)])
-    st = SignalSettings(float(fs), int(a_h.size), pass_cv_max=float(cv), pass_delay_max=float(jitter))
+    st = PassSettings(float(fs), pass_cv_max=float(cv), pass_delay_max=float(jitter))
     modes = np.stack(np.broadcast_arrays(f, z, g), -1)
     y, fac, shifts, _, _ = pass_variability(item_keys(seed, [0])[0], jnp.asarray(a_h), jnp.asarray(y),
                                             jnp.asarray(tpp), jnp.float64(1.0), jnp.asarray(modes), jnp.float64(1.0), st)

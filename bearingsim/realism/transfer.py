@@ -40,7 +40,8 @@ from ..datasets import make_dataset
 from ..errors import InputError
 from ..names import CLASSES
 from ..signals.nuisance import INGREDIENTS
-from ..signals.features import FEATURE_NAMES, FaultOrders, cut_windows, window_features
+from ..physics.kinematics import DefectFrequencies
+from ..signals.features import FEATURE_NAMES, cut_windows, window_features
 from ..signals.plain_features import PLAIN_FEATURE_NAMES, plain_features
 
 __all__ = ["CLASSES", "REAL_RECORDS", "DEV_RECORDS", "DEV_GRADES", "CLASSIFIERS", "dev_records", "diagnosable",
@@ -221,7 +222,7 @@ class Windows:
     feature_names: tuple = FEATURE_NAMES
 
 
-def real_windows(data_dir, orders: FaultOrders, window_s=0.2, records=None, channel="DE", max_windows=None,
+def real_windows(data_dir, orders: DefectFrequencies, window_s=0.2, records=None, channel="DE", max_windows=None,
                  features="own", sample_rate_Hz=None) -> Windows:
     """Windows of the real records (``records``: {file stem: class name}, default
     :data:`REAL_RECORDS`) of ``data_dir``; shaft speed from each record's rpm; at most
@@ -256,7 +257,7 @@ def real_windows(data_dir, orders: FaultOrders, window_s=0.2, records=None, chan
     return Windows(np.concatenate(F), np.asarray(y), np.asarray(g), np.asarray(sh), names)
 
 
-def simulated_windows(path, orders: FaultOrders, window_s=None, features="own") -> Windows:
+def simulated_windows(path, orders: DefectFrequencies, window_s=None, features="own") -> Windows:
     """Windows of a data set file (``bearingsim dataset``): every item with result 0 cut into
     ``window_s`` windows (default: the whole item), grouped by item index; ``features`` a name
     of :data:`FEATURE_SETS`."""
@@ -390,7 +391,7 @@ def dev_text(reports, grades=None) -> str:
     return "\n".join(out)
 
 
-def transfer_benchmark(sim_path, data_dir, orders: FaultOrders, window_s=0.2, records=None,
+def transfer_benchmark(sim_path, data_dir, orders: DefectFrequencies, window_s=0.2, records=None,
                        classifiers=CLASSIFIERS, max_windows=None, features="own", sample_rate_Hz=None) -> list:
     """Train each classifier on the windows of the data set file ``sim_path``, test on the real
     records (resampled to ``sample_rate_Hz`` when given: the data set's rate); ``features`` a

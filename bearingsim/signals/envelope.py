@@ -2,7 +2,7 @@
 
 This stage sits after the JAX dynamics and works on plain NumPy arrays (SciPy
 filters and FFTs).  It implements the classical envelope analysis of Randall &
-Antoni (MODEL.md §8): band-pass the signal around a resonance excited by the
+Antoni (docs/model.md §8): band-pass the signal around a resonance excited by the
 spall impacts, take the squared envelope ``|hilbert(x)|**2``, and look at its
 spectrum for lines at BPFO and its harmonics.
 
@@ -23,12 +23,13 @@ Conventions
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-from numbers import Integral, Real
+from dataclasses import dataclass
+from numbers import Integral
 
 import numpy as np
 
 from ..errors import InputError, InputTypeError
+from .checks import check_band, check_fs, check_freq, check_signal, unpack_band
 
 __all__ = [
     "Spectrum",
@@ -39,83 +40,8 @@ __all__ = [
     "envelope_spectrum",
     "peak_frequency",
     "harmonic_peaks",
-    "fault_lines",
     "select_band",
-    "defect_markers",
-    "RecordMetrics",
-    "record_metrics",
 ]
-
-
-# --------------------------------------------------------------------------- checks
-_BAND_HINT = "the band is (f_lo, f_hi) in Hz with 0 < f_lo < f_hi < fs/2"
-
-
-def _check_fs(fs) -> float:
-    if isinstance(fs, (bool, np.bool_)) or not isinstance(fs, (Real, np.integer, np.floating)):
-        raise InputTypeError(f"fs must be a real number (sampling frequency in Hz), got {type(fs).__name__}",
-                             "pass the sample rate as a float or int, e.g. fs=12000.0")
-    fs = float(fs)
-    if not np.isfinite(fs) or fs <= 0.0:
-        raise InputError(f"fs must be a finite sampling frequency > 0 Hz, got {fs}",
-                         "the sample rate of the record in Hz, e.g. 12000")
-    return fs
-
-
-def _check_signal(x, name: str = "x", min_len: int = 2) -> np.ndarray:
-    a = np.asarray(x)
-    if np.iscomplexobj(a):
-        raise InputError(f"{name} must be real-valued, got a complex array",
-                         f"pass the real part (np.real({name})) or one real channel")
-    if a.ndim != 1:
-        raise InputError(f"{name} must be a 1-D array (one channel), got shape {a.shape}",
-                         f"pass one channel, e.g. {name}[:, 0] of a (samples, channels) array")
-    try:
-        a = a.astype(float, copy=False)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numeric, got dtype {a.dtype}",
-                         "pass the samples as a float array") from exc
-    if a.size < min_len:
-        raise InputError(f"{name} needs at least {min_len} samples, got {a.size}", "pass a longer record")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise InputError(f"{name} must be finite: {int(bad.sum())} NaN/inf value(s), first at index {i} ({a[i]})",
-                         "remove or interpolate the non-finite samples before the analysis")
-    return a
-
-
-def _check_freq(value, name: str) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (Real, np.integer, np.floating)):
-        raise InputTypeError(f"{name} must be a real number (Hz), got {type(value).__name__}",
-                             f"pass {name} as a float or int in Hz")
-    value = float(value)
-    if not np.isfinite(value):
-        raise InputError(f"{name} must be finite, got {value}", f"pass {name} as a finite frequency in Hz")
-    return value
-
-
-def _check_band(f_lo, f_hi, fs: float) -> tuple[float, float]:
-    f_lo = _check_freq(f_lo, "f_lo")
-    f_hi = _check_freq(f_hi, "f_hi")
-    nyq = fs / 2.0
-    if f_lo <= 0.0:
-        raise InputError(f"f_lo must be > 0 Hz, got {f_lo:g}", _BAND_HINT)
-    if f_hi >= nyq:
-        raise InputError(f"f_hi must be < fs/2 = {nyq:g} Hz (Nyquist), got {f_hi:g}", _BAND_HINT)
-    if f_lo >= f_hi:
-        raise InputError(f"f_lo must be < f_hi, got f_lo = {f_lo:g} Hz >= f_hi = {f_hi:g} Hz", _BAND_HINT)
-    return f_lo, f_hi
-
-
-def _unpack_band(band, fs: float):
-    if band is None:
-        return None
-    try:
-        f_lo, f_hi = band
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"band must be None or a pair (f_lo, f_hi) in Hz, got {band!r}", _BAND_HINT) from exc
-    return _check_band(f_lo, f_hi, fs)
 
 
 # --------------------------------------------------------------------------- filters
@@ -129,12 +55,12 @@ def bandpass(x, fs, f_lo, f_hi, order: int = 4) -> np.ndarray:
     """
     import scipy.signal as ss
 
-    fs = _check_fs(fs)
-    f_lo, f_hi = _check_band(f_lo, f_hi, fs)
+    fs = check_fs(fs)
+    f_lo, f_hi = check_band(f_lo, f_hi, fs)
     if isinstance(order, (bool, np.bool_)) or not isinstance(order, Integral) or order < 1:
         raise InputError(f"order must be an integer >= 1, got {order!r}",
                          "order is the Butterworth order of the band-pass, e.g. 4")
-    x = _check_signal(x)
+    x = check_signal(x)
     sos = ss.butter(int(order), [f_lo, f_hi], btype="bandpass", fs=fs, output="sos")
     # scipy's default padlen for sosfiltfilt; check it here for a clear message
     n_zeros = min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
@@ -157,9 +83,9 @@ def squared_envelope(x, fs, band=None) -> np.ndarray:
     """
     import scipy.signal as ss
 
-    fs = _check_fs(fs)
-    x = _check_signal(x)
-    b = _unpack_band(band, fs)
+    fs = check_fs(fs)
+    x = check_signal(x)
+    b = unpack_band(band, fs)
     if b is not None:
         x = bandpass(x, fs, *b)
     se = np.abs(ss.hilbert(x)) ** 2
@@ -233,8 +159,8 @@ def amplitude_spectrum(x, fs, window="hann", nfft=None) -> Spectrum:
     Same normalisation and padding conventions as :func:`envelope_spectrum`; the
     mean of ``x`` is *not* removed.
     """
-    fs = _check_fs(fs)
-    x = _check_signal(x)
+    fs = check_fs(fs)
+    x = check_signal(x)
     return _spectrum(x, fs, window, nfft, None, Spectrum)
 
 
@@ -248,9 +174,9 @@ def envelope_spectrum(x, fs, band=None, window="hann", nfft=None) -> EnvelopeSpe
     shows a line of height ``a`` (e.g. for an AM carrier
     ``A (1 + m cos 2 pi f_m t) cos 2 pi f_c t`` the line at ``f_m`` is ``2 m A²``).
     """
-    fs = _check_fs(fs)
-    x = _check_signal(x)
-    b = _unpack_band(band, fs)
+    fs = check_fs(fs)
+    x = check_signal(x)
+    b = unpack_band(band, fs)
     se = squared_envelope(x, fs, b)
     return _spectrum(se, fs, window, nfft, b, EnvelopeSpectrum)
 
@@ -303,7 +229,7 @@ def peak_frequency(spectrum: Spectrum, f_expected, rel_window: float = 0.1) -> f
     maximum.
     """
     _check_spectrum(spectrum)
-    f_expected = _check_freq(f_expected, "f_expected")
+    f_expected = check_freq(f_expected, "f_expected")
     if f_expected <= 0.0:
         raise InputError(f"f_expected must be > 0 Hz, got {f_expected:g}",
                          "f_expected is the frequency (Hz) of the line to look for, e.g. BPFO")
@@ -329,7 +255,7 @@ def harmonic_peaks(spectrum: Spectrum, f0, n: int = 5, rel_window: float = 0.05)
     (e.g. above Nyquist) give ``(k, nan, nan)``.
     """
     _check_spectrum(spectrum)
-    f0 = _check_freq(f0, "f0")
+    f0 = check_freq(f0, "f0")
     if f0 <= 0.0:
         raise InputError(f"f0 must be > 0 Hz, got {f0:g}", "f0 is the fundamental frequency (Hz) of the harmonics")
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, Integral) or n < 1:
@@ -377,16 +303,16 @@ def select_band(x, fs, resonance_hz=None, bandwidth_hz=None, *, f_min=None, retu
     ``(band, centres, kurtosis)`` for inspection (``centres``/``kurtosis`` are
     None when the resonance was given).
     """
-    fs = _check_fs(fs)
-    x = _check_signal(x)
+    fs = check_fs(fs)
+    x = check_signal(x)
     nyq = fs / 2.0
     if resonance_hz is not None:
-        fr = _check_freq(resonance_hz, "resonance_hz")
+        fr = check_freq(resonance_hz, "resonance_hz")
         if not (0.0 < fr < nyq):
             raise InputError(f"resonance_hz must be in (0, fs/2 = {nyq:g}) Hz, got {fr:g}",
                              "give a resonance below the Nyquist frequency, or None to pick the band by "
                              "envelope kurtosis")
-        bw = 0.25 * fr if bandwidth_hz is None else _check_freq(bandwidth_hz, "bandwidth_hz")
+        bw = 0.25 * fr if bandwidth_hz is None else check_freq(bandwidth_hz, "bandwidth_hz")
         if bw <= 0.0:
             raise InputError(f"bandwidth_hz must be > 0 Hz, got {bw:g}",
                              "give a bandwidth in Hz, or None for 0.25 x resonance_hz")
@@ -402,7 +328,7 @@ def select_band(x, fs, resonance_hz=None, bandwidth_hz=None, *, f_min=None, retu
     if bandwidth_hz is not None:
         raise InputError(f"bandwidth_hz (= {bandwidth_hz!r}) only applies when resonance_hz is given",
                          "give resonance_hz too, or leave bandwidth_hz None")
-    f_min = fs / 64.0 if f_min is None else _check_freq(f_min, "f_min")
+    f_min = fs / 64.0 if f_min is None else check_freq(f_min, "f_min")
     if not (0.0 < f_min < nyq):
         raise InputError(f"f_min must be in (0, fs/2 = {nyq:g}) Hz, got {f_min:g}",
                          "f_min is the lowest band edge of the search (Hz); None for fs/64")
@@ -420,160 +346,3 @@ def select_band(x, fs, resonance_hz=None, bandwidth_hz=None, *, f_min=None, retu
     return (band, centres, kurt) if return_kurtosis else band
 
 
-# --------------------------------------------------------------------------- markers
-def defect_markers(freqs: dict, n_harmonics: int = 5, harmonics_of=("BPFO",)):
-    """Marker lines for an envelope-spectrum plot.
-
-    ``freqs`` maps label -> frequency (Hz).  Lines whose label is in
-    ``harmonics_of`` (default BPFO) are expanded to ``n_harmonics`` harmonics
-    labelled ``"BPFO", "2xBPFO", ..., "5xBPFO"``; all other lines appear once.
-    Returns a list of ``(label, frequency)`` in the order of ``freqs``.
-    """
-    if not isinstance(freqs, dict):
-        raise InputTypeError(f"freqs must be a dict label -> frequency (Hz), got {type(freqs).__name__}",
-                             "e.g. {'BPFO': 107.4, 'FTF': 11.9, 'shaft': 29.95}")
-    if isinstance(n_harmonics, (bool, np.bool_)) or not isinstance(n_harmonics, Integral) or n_harmonics < 1:
-        raise InputError(f"n_harmonics must be an integer >= 1, got {n_harmonics!r}",
-                         "n_harmonics is the number of harmonics drawn of each line in harmonics_of, e.g. 5")
-    expand = {str(h).upper() for h in harmonics_of}
-    out = []
-    for label, f in freqs.items():
-        f = _check_freq(f, f"freqs[{label!r}]")
-        if f <= 0.0:
-            raise InputError(f"freqs[{label!r}] must be > 0 Hz, got {f:g}",
-                             "every marker is a positive frequency in Hz")
-        if str(label).upper() in expand:
-            out.extend((str(label) if k == 1 else f"{k}x{label}", k * f) for k in range(1, int(n_harmonics) + 1))
-        else:
-            out.append((str(label), f))
-    return out
-
-
-def fault_lines(frequencies: dict, location: str | None = "outer") -> tuple[str, float, dict]:
-    """(name, frequency in Hz, envelope-spectrum markers) of a defect class (MODEL.md 8, 9).
-
-    ``frequencies``: shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz (a simulation's).  ``location``
-    "outer" (or None: healthy, analysed at BPFO): BPFO with FTF and shaft; "inner": BPFI with its
-    shaft-rate sidebands BPFI -/+ f_r; "ball": 2 BSF (the pit meets a raceway twice per ball
-    turn) with its cage-rate sidebands 2 BSF -/+ FTF."""
-    fr, fc, sh = frequencies, frequencies["ftf_Hz"], frequencies["shaft_Hz"]
-    if location == "inner":
-        f = fr["bpfi_Hz"]
-        return "BPFI", f, {"BPFI": f, "BPFI-fr": f - sh, "BPFI+fr": f + sh, "shaft": sh}
-    if location == "ball":
-        f = 2.0 * fr["bsf_Hz"]
-        return "2BSF", f, {"2BSF": f, "2BSF-FTF": f - fc, "2BSF+FTF": f + fc, "FTF": fc}
-    if location not in (None, "outer"):
-        raise InputError(f"defect location must be 'outer', 'inner', 'ball' or None, got {location!r}",
-                         "None analyses a healthy bearing at BPFO")
-    f = fr["bpfo_Hz"]
-    return "BPFO", f, {"BPFO": f, "FTF": fc, "shaft": sh}
-
-
-# --------------------------------------------------------------------------- record metrics
-@dataclass(frozen=True)
-class RecordMetrics:
-    """Headline metrics of one vibration record (see :func:`record_metrics`).
-
-    rms                 : RMS of the de-meaned record (its unit, g for the CWRU records)
-    kurtosis            : kurtosis E[x^4]/E[x^2]^2 of the de-meaned record (3 for Gaussian noise)
-    band_kurtosis       : the same of the band-passed signal
-    peak_hz             : squared-envelope-spectrum peak within +-5 % of the fault frequency (Hz)
-    peak_order          : peak_hz / shaft_hz
-    peak_over_median_db : 20 log10(peak / median of the spectrum over 30-600 Hz)
-    peak_over_local_db  : 20 log10(peak / median over 0.5-1.5 x the nominal fault frequency)
-    a2_a1, a3_a1        : largest lines within +-1 % of 2 and 3 x peak_hz over the first
-    """
-
-    rms: float
-    kurtosis: float
-    band_kurtosis: float
-    peak_hz: float
-    peak_order: float
-    peak_over_median_db: float
-    peak_over_local_db: float
-    a2_a1: float
-    a3_a1: float
-
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-
-def _largest_near(f, S, f0, rel):
-    m = (f > f0 * (1.0 - rel)) & (f < f0 * (1.0 + rel))
-    if not m.any():
-        raise InputError(f"no spectrum bin within {f0:g} Hz +- {100 * rel:g} %",
-                         "the line (fault_order x shaft_hz and its harmonics) must lie below fs/2, and the "
-                         "record must be long enough to resolve it")
-    i = int(np.argmax(S[m]))
-    return float(f[m][i]), float(S[m][i])
-
-
-def record_metrics(x, fs, shaft_hz, fault_order, band=(2500.0, 5500.0),
-                   median_window=(30.0, 600.0)) -> RecordMetrics:
-    """RMS, kurtosis and squared-envelope metrics of a record, exactly as the reference analysis.
-
-    This is the procedure of ``../shared/realdata/analyze_real.py`` (fixed band) that produced the
-    real-record table of ``reference-data.md``, so simulated and measured records are compared
-    with one analysis:
-
-    * ``x`` is de-meaned; RMS and kurtosis (non-excess) of the whole record;
-    * band-pass ``band`` (Butterworth order 4, zero phase), squared envelope ``|hilbert|**2``
-      minus its mean (:func:`squared_envelope`), symmetric Hann window (``np.hanning``),
-      zero-padded to ``nfft = 2**(ceil(log2 n) + 2)``, amplitude ``|rfft| * 2 / sum(w)``;
-    * the fault line is the largest bin within ``fault_order * shaft_hz * (1 +- 5 %)`` (no
-      interpolation); A2, A3 are the largest bins within ``k * peak_hz * (1 +- 1 %)``;
-    * peak over median: against the median of the spectrum over ``median_window`` (30-600 Hz,
-      as in reference-data.md) and, as analyze_real.py prints it, over 0.5-1.5 x the nominal
-      fault frequency.
-
-    Both peak-over-median figures grow with record length (the line is coherent, the floor is
-    not: about +10 log10(T2/T1) dB), so compare records of equal duration.
-    """
-    import scipy.signal as ss
-
-    fs = _check_fs(fs)
-    x = _check_signal(x, min_len=16)
-    shaft_hz = _check_freq(shaft_hz, "shaft_hz")
-    fault_order = _check_freq(fault_order, "fault_order")
-    if shaft_hz <= 0.0 or fault_order <= 0.0:
-        raise InputError(f"shaft_hz and fault_order must be > 0, got {shaft_hz:g}, {fault_order:g}",
-                         "shaft_hz is the shaft speed in Hz (rpm / 60); fault_order the fault line over it "
-                         "(e.g. BPFO / f_r)")
-    b = _unpack_band(band, fs)
-    if b is None:
-        raise InputError("band must be a pair (f_lo, f_hi) in Hz, got None", _BAND_HINT)
-    lo, hi = (_check_freq(v, "median_window") for v in median_window)
-    if not 0.0 <= lo < hi:
-        raise InputError(f"median_window must be (lo, hi) with 0 <= lo < hi, got {median_window!r}",
-                         "the frequency range (Hz) of the spectrum's floor, default (30, 600)")
-    x = x - x.mean()
-    m2 = float(np.mean(x * x))
-    if m2 == 0.0:
-        raise InputError(f"x is constant (all {x.size} samples equal): RMS and kurtosis are undefined",
-                         "check the channel and the file of the record")
-    y = bandpass(x, fs, *b)
-    yc = y - y.mean()
-    e2 = np.abs(ss.hilbert(y)) ** 2
-    e2 -= e2.mean()
-    w = np.hanning(e2.size)
-    nfft = 1 << (int(np.ceil(np.log2(e2.size))) + 2)
-    S = np.abs(np.fft.rfft(e2 * w, nfft)) * 2.0 / w.sum()
-    f = np.fft.rfftfreq(nfft, 1.0 / fs)
-    f_nom = fault_order * shaft_hz
-    f1, a1 = _largest_near(f, S, f_nom, 0.05)
-    _, a2 = _largest_near(f, S, 2.0 * f1, 0.01)
-    _, a3 = _largest_near(f, S, 3.0 * f1, 0.01)
-    med = float(np.median(S[(f > lo) & (f < hi)]))
-    loc = float(np.median(S[(f > 0.5 * f_nom) & (f < 1.5 * f_nom)]))
-    return RecordMetrics(
-        rms=float(np.sqrt(m2)),
-        kurtosis=float(np.mean(x**4) / m2**2),
-        band_kurtosis=float(np.mean(yc**4) / np.mean(yc * yc) ** 2),
-        peak_hz=f1,
-        peak_order=f1 / shaft_hz,
-        peak_over_median_db=float(20.0 * np.log10(a1 / med)),
-        peak_over_local_db=float(20.0 * np.log10(a1 / loc)),
-        a2_a1=a2 / a1,
-        a3_a1=a3 / a1,
-    )

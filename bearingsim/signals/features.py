@@ -34,32 +34,22 @@ processed together (N, T).
 """
 from __future__ import annotations
 
-from typing import NamedTuple
 
 import numpy as np
 import scipy.signal as ss
 
 from ..errors import InputError
 from ..physics.defect import LOCATIONS
-from ..physics.kinematics import defect_frequencies
+from ..physics.kinematics import DefectFrequencies, defect_frequencies
 
-__all__ = ["FaultOrders", "fault_orders", "FEATURE_NAMES", "window_features", "cut_windows", "octave_bands"]
-
-
-class FaultOrders(NamedTuple):
-    """Characteristic frequencies as multiples of the shaft frequency."""
-
-    bpfo: float
-    bpfi: float
-    two_bsf: float
-    ftf: float
+__all__ = ["fault_orders", "FEATURE_NAMES", "window_features", "cut_windows", "octave_bands"]
 
 
-def fault_orders(bearing, alpha=None) -> FaultOrders:
-    """The bearing's fault orders (MODEL.md section 8) at ``alpha`` (default: its free contact
-    angle)."""
-    f = defect_frequencies(bearing, 1.0, alpha)
-    return FaultOrders(float(f.bpfo), float(f.bpfi), float(f.two_bsf), float(f.ftf))
+def fault_orders(bearing, alpha=None) -> DefectFrequencies:
+    """The bearing's fault orders: its :class:`DefectFrequencies` per unit shaft frequency
+    (shaft 1, FTF, BPFO, BPFI, BSF as multiples of the shaft frequency; ``two_bsf`` = 2 BSF),
+    floats, at ``alpha`` (rad; default: its free contact angle; docs/model.md section 8)."""
+    return DefectFrequencies(*(float(v) for v in defect_frequencies(bearing, 1.0, alpha)))
 
 
 _LINES = ("O1", "O2", "O3", "I1", "I2", "I3", "Isb", "B1", "B2", "Bsb", "Ccomb", "R1", "R2", "Rcomb", "C")
@@ -111,7 +101,7 @@ def _line_db(f, S, f0, floor, df):
     return 20.0 * np.log10(np.maximum(peak, 1e-300) / floor)
 
 
-def window_features(windows, fs, shaft_hz, orders: FaultOrders) -> np.ndarray:
+def window_features(windows, fs, shaft_hz, orders: DefectFrequencies) -> np.ndarray:
     """(N, len(FEATURE_NAMES)) features of ``windows`` (N, T) sampled at ``fs``; ``shaft_hz``
     scalar or (N,) (the shaft frequency of each window)."""
     X = np.atleast_2d(np.asarray(windows, float))

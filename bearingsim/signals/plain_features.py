@@ -30,7 +30,7 @@ import numpy as np
 import scipy.signal as ss
 
 from ..errors import InputError
-from .features import FaultOrders
+from ..physics.kinematics import DefectFrequencies
 
 __all__ = ["PLAIN_BANDS_HZ", "PLAIN_LINES", "PLAIN_FEATURE_NAMES", "plain_features", "line_orders"]
 
@@ -46,7 +46,7 @@ _REL = 0.015          # line window (relative)
 _LOCAL = 0.5          # local floor: the median between (1 -+ _LOCAL) f0
 
 
-def line_orders(orders: FaultOrders) -> np.ndarray:
+def line_orders(orders: DefectFrequencies) -> np.ndarray:
     """The lines of :data:`PLAIN_LINES` as multiples of the shaft frequency."""
     o = orders
     return np.array([o.bpfo, 2 * o.bpfo, o.bpfi, 2 * o.bpfi, o.bpfi - 1.0, o.bpfi + 1.0,
@@ -67,7 +67,7 @@ def _lines_db(f, S, f0, half):
     return out
 
 
-def plain_features(windows, fs, shaft_hz, orders: FaultOrders) -> np.ndarray:
+def plain_features(windows, fs, shaft_hz, orders: DefectFrequencies) -> np.ndarray:
     """(N, len(PLAIN_FEATURE_NAMES)) features of ``windows`` (N, T) sampled at ``fs`` (at least
     12 kHz); ``shaft_hz`` scalar or (N,)."""
     X = np.atleast_2d(np.asarray(windows, float))

@@ -1,5 +1,5 @@
 """The NumPy pass-to-pass variability (the package's former host twin of
-:func:`bearingsim.signals.signal_stage.pass_variability`): per-pass factors and delays from NumPy
+:func:`bearingsim.dynamics.passes.pass_variability`): per-pass factors and delays from NumPy
 generators seeded by an integer, the raised-cosine windows, the strike mask.  An independent
 oracle for the tests only (the package draws from keys, in JAX)."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The NumPy/SciPy sensor path (the package's former host twins of :mod:`bearingsim.signals.sensor`):
+"""The NumPy/SciPy sensor path (the package's former host twins of :mod:`bearingsim.dynamics.sensor`):
 the modes discretised with scipy's matrix exponential of the unbalanced 4x4 system, and NumPy
 measurement noise.  An independent oracle for the tests only."""
 from __future__ import annotations
@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
 
-from bearingsim.signals.sensor import SensorFilter
+from bearingsim.dynamics.sensor import SensorFilter
 
 
 def sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:
