@@ -13,8 +13,8 @@ PACKAGE = ROOT / "bearingsim"
 #: top-level infrastructure).  The core (physics, signals, dynamics) imports nothing of the edge.
 FOLDERS = {
     "physics": set(),
-    "signals": {"physics"},
-    "dynamics": {"physics", "signals"},
+    "dynamics": {"physics"},
+    "signals": {"physics", "dynamics"},
     "case": {"physics"},
     "output": {"physics", "signals", "dynamics", "case"},
     "datasets": {"physics", "signals", "dynamics", "case", "output"},
@@ -24,7 +24,7 @@ FOLDERS = {
 CORE = {"physics", "signals", "dynamics"}
 EDGE = set(FOLDERS) - CORE
 #: the top-level modules: start-up and the vocabulary every layer shares (no folder's module)
-INFRASTRUCTURE = {"__init__", "_version", "runtime", "moved", "errors", "names", "keys", "xla", "programs", "fastmath"}
+INFRASTRUCTURE = {"__init__", "_version", "runtime", "errors", "names", "keys", "xla", "programs", "fastmath"}
 
 
 def stage(path: Path) -> str:
@@ -127,42 +127,22 @@ def test_the_package_root_imports_only_the_infrastructure():
     assert not found, f"importing bearingsim pulls in: {found}"
 
 
-def test_nothing_uses_an_old_path():
-    """The paths before the folders (bearingsim.jones, ...) still import for users, with a
-    DeprecationWarning (bearingsim.moved); the package, its tests, notebooks and benchmarks use
-    the new ones."""
-    import re
-
-    from bearingsim.moved import MOVED
-
-    old = re.compile(r"\bbearingsim\.(" + "|".join(re.escape(k) for k in sorted(MOVED, key=len, reverse=True))
-                     + r")\b(?!\s*\()")
-    bad = []
-    for d in ("bearingsim", "tests", "benchmarks", "notebooks", "docs"):
-        for p in sorted((ROOT / d).rglob("*")):
-            if p.suffix not in (".py", ".ipynb", ".md") or p.name in ("moved.py", "test_architecture.py") \
-                    or p == PACKAGE / "__init__.py":
-                continue
-            for k, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
-                names = re.search(r"from bearingsim import ([\w ,]+)", line)        # from bearingsim import jones
-                names = {n.strip().split(" ")[0] for n in names.group(1).split(",")} if names else set()
-                alias = re.search(r"\bbs\.(\w+)\.", line)                           # bs.jones.solve
-                if old.search(line) or names & set(MOVED) or (alias and alias.group(1) in MOVED):
-                    bad.append(f"{p.relative_to(ROOT)}:{k}: {line.strip()[:100]}")
-    assert not bad, "old module paths:\n" + "\n".join(bad)
-
-
-def test_an_old_path_is_the_same_module_with_a_warning():
+def test_the_old_flat_paths_are_gone():
+    """The flat paths before the folders (bearingsim.jones, bearingsim.signal, ...) warned for a
+    release (bearingsim.moved) and are removed (issue 35): an old path is not importable and is no
+    attribute of the package, so a stale import fails at once instead of warning."""
     import importlib
     import sys
 
-    from bearingsim.physics import jones
+    import bearingsim
 
-    sys.modules.pop("bearingsim.jones", None)
-    with pytest.warns(DeprecationWarning, match="bearingsim.physics.jones"):
-        old = importlib.import_module("bearingsim.jones")
-    assert old is jones and jones.__spec__.name == "bearingsim.physics.jones"   # it keeps its own spec
-    sys.modules.pop("bearingsim.jones", None)
+    for old in ("jones", "signal", "workflows"):
+        sys.modules.pop(f"bearingsim.{old}", None)
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(f"bearingsim.{old}")
+        with pytest.raises(AttributeError):
+            getattr(bearingsim, old)
+    assert not (PACKAGE / "moved.py").exists()
 
 
 def private_imports(paths, module_of):
@@ -224,7 +204,7 @@ def test_no_two_modules_import_each_other():
 
 #: the start-up seams (bearingsim/...): ``import bearingsim`` (lazy exports) and the command line
 #: (its ``_Lazy`` loaders: ``bearingsim --help`` loads no JAX) import bearingsim modules at first use
-SEAMS = {"__init__.py", "app/cli.py"}
+SEAMS = {"__init__.py", "app/lazy_modules.py"}
 #: function-local imports of bearingsim modules outside the seams, at most; each gives its reason
 MAX_LOCAL_IMPORTS = 10
 #: files whose function-local imports are still to move to the top (issue 35 item 4; edited by the
@@ -316,10 +296,12 @@ def test_the_command_line_has_no_set_branch():
     """Sets go through bearingsim.app.workflows like single bearings (issue 27 item 7): the workflow
     entries dispatch on the case, so cli.py neither asks whether a case is a set nor imports the
     set edge module."""
-    path = PACKAGE / "app" / "cli.py"
-    src = path.read_text(encoding="utf-8")
-    assert "is_set" not in src
-    assert not [t for _, t, _ in imports(path, "bearingsim.app.cli") if t == "bearingsim.app.sets"]
+    for name in ("cli", "commands"):
+        path = PACKAGE / "app" / f"{name}.py"
+        src = path.read_text(encoding="utf-8")
+        assert "is_set" not in src
+        assert not [t for _, t, _ in imports(path, f"bearingsim.app.{name}")
+                    if t in ("bearingsim.app.set_workflows", "bearingsim.output.set_report", "bearingsim.output.plots_set")]
 
 
 def test_the_newton_machinery_lives_in_one_module():
@@ -391,3 +373,45 @@ def test_one_definition_of_the_fault_classes():
                 if isinstance(t, ast.Name) and t.id.endswith("CLASSES") and "healthy" in ast.unparse(node.value):
                     found.append(f"{path.relative_to(PACKAGE)} {t.id}")
     assert found == ["names.py CLASSES"], found
+
+
+#: the per-frequency keys of the results files and data set labels
+FREQUENCY_KEYS = {"shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz"}
+
+
+def frequency_shapes(path: Path):
+    """(line, what) of every in-memory frequency container in ``path`` other than
+    DefectFrequencies: a dict literal or ``dict(...)`` call keyed mostly (half its keys or more,
+    two at least) by :data:`FREQUENCY_KEYS` (a table of label columns that includes some is not
+    one), or a class with ``bpfo`` and ``bpfi`` fields."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        keys = set()
+        if isinstance(node, ast.Dict):
+            keys = {k.value for k in node.keys if isinstance(k, ast.Constant)}
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict":
+            keys = {k.arg for k in node.keywords}
+        n = len(keys & FREQUENCY_KEYS)
+        if n >= 2 and 2 * n >= len(keys):
+            yield node.lineno, "a dict of defect frequencies"
+        if isinstance(node, ast.ClassDef) and node.name != "DefectFrequencies":
+            fields = {t.target.id for t in node.body if isinstance(t, ast.AnnAssign) and isinstance(t.target, ast.Name)}
+            if {"bpfo", "bpfi"} <= fields:
+                yield node.lineno, f"class {node.name} with bpfo and bpfi fields"
+
+
+def test_the_frequency_scanner_finds_other_shapes(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text("a = {'bpfo_Hz': 1.0, 'bpfi_Hz': 2.0}\nb = dict(shaft_Hz=1, ftf_Hz=2)\n"
+                 "class F:\n    bpfo: float\n    bpfi: float\nc = {'bpfo_Hz': 1}\n")
+    assert sorted(line for line, _ in frequency_shapes(p)) == [1, 2, 3]
+    p.write_text("labels = {'bpfo_Hz': 1, 'bpfi_Hz': 2, 'index': 0, 'speed_rpm': 1, 'split': 0}\n")
+    assert list(frequency_shapes(p)) == []
+
+
+def test_one_frequency_type():
+    """Issue 35 item 3: every result that reports defect frequencies holds a
+    ``physics.kinematics.DefectFrequencies`` (its ``hz()`` / ``from_hz`` convert to and from the
+    ``*_Hz`` fields of files and labels); no module builds a dict or a class of its own."""
+    found = [f"bearingsim/{p.relative_to(PACKAGE).as_posix()}:{line}: {what}"
+             for p in sources() for line, what in frequency_shapes(p)]
+    assert not found, "use DefectFrequencies instead:\n" + "\n".join(found)

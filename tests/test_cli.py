@@ -10,7 +10,8 @@ import h5py
 import numpy as np
 import pytest
 
-from bearingsim.app import cli, workflows
+from bearingsim.app import cli, signal_workflows, workflows
+from bearingsim.physics.kinematics import DefectFrequencies
 from bearingsim.output import io
 from bearingsim.case import load_case
 from bearingsim.datasets import DatasetResult, DatasetSummary
@@ -22,7 +23,7 @@ SMALL = ROOT / "tests" / "data" / "small_sweep.toml"
 def test_info_by_name(capsys):
     assert cli.main(["info", "harris218_thrust"]) == 0
     out = capsys.readouterr().out
-    assert "1.2965e+06" in out and "1.3486e+06" in out    # K_i, K_o in N/mm^1.5 (reference-data.md: 1.297e6, 1.349e6)
+    assert "1.2965e+06" in out and "1.3486e+06" in out    # K_i, K_o in N/mm^1.5 (docs/reference-data.md: 1.297e6, 1.349e6)
     assert "BPFO" in out and "once per ball revolution" in out and "22.2250 mm" in out
 
 
@@ -87,19 +88,19 @@ def test_spectrum_of_a_simulation_file(tmp_path, capsys):
         Q_outer=np.zeros((t.size, 9)), alpha_inner=np.zeros((t.size, 9)), alpha_outer=np.zeros((t.size, 9)),
         jump_times=np.zeros(0), pass_times=np.zeros(0), contact_angle=0.0, result=0, num_steps=1,
         ball_iterations=1, contact_damping=np.zeros(3),
-        frequencies=dict(shaft_Hz=29.95, ftf_Hz=bpfo / 9, bpfo_Hz=bpfo, bpfi_Hz=162.0, bsf_Hz=70.0))
+        frequencies=DefectFrequencies(shaft=29.95, ftf=bpfo / 9, bpfo=bpfo, bpfi=162.0, bsf=70.0))
     io.write_simulation(tmp_path / "sim.h5", case, res)
     assert cli.main(["spectrum", str(tmp_path / "sim.h5"), "--plot", str(tmp_path / "env.png")]) == 0
     out = capsys.readouterr().out
     assert "band 2625-3375 Hz" in out and "relative difference" in out
-    assert abs(workflows.spectrum_file(tmp_path / "sim.h5").peak - bpfo) < 2.1       # resolution 2 Hz
+    assert abs(signal_workflows.spectrum_file(tmp_path / "sim.h5").peak - bpfo) < 2.1       # resolution 2 Hz
     assert (tmp_path / "env.png").stat().st_size > 10_000
 
 
 def test_dataset_reports_failed_items(tmp_path, monkeypatch, capsys):
     code = int(DatasetResult.nonfinite_signal)
     summary = DatasetSummary(tmp_path / "d.h5", 6, 480, 2, 1.5, {code: 2})
-    monkeypatch.setattr(workflows, "dataset_case", lambda case, path, **kw: summary)
+    monkeypatch.setattr(signal_workflows, "dataset_case", lambda case, path, **kw: summary)
     assert cli.main(["dataset", "dataset_cwru", "-o", str(tmp_path / "d.h5")]) == 0
     err = capsys.readouterr().err
     assert "2 of 6 items failed (2 the simulated signal is not finite)" in err
@@ -114,7 +115,7 @@ def test_help(argv, capsys):
 
 
 def test_static_and_info_on_a_set(tmp_path, capsys):
-    """`bearingsim static` and `info` on a set case (MODEL.md 10): per bearing the axial load,
+    """`bearingsim static` and `info` on a set case (docs/model.md section 10): per bearing the axial load,
     the lift-off margin and every ball; the JSON record and the polar plot are written."""
     import json
     js, png = tmp_path / "set.json", tmp_path / "set.png"
@@ -124,7 +125,7 @@ def test_static_and_info_on_a_set(tmp_path, capsys):
     rec = json.loads(js.read_text())
     assert rec["result"] == 0 and len(rec["bearings"]) == 2 and png.stat().st_size > 0
     # the shaft's axial equilibrium from the record: R1z - R2z = Fz
-    Fz = rec["bearings"][0]["loads"][2] - rec["bearings"][1]["loads"][2]
+    Fz = rec["bearings"][0]["loads"]["axial_N"] - rec["bearings"][1]["loads"]["axial_N"]
     assert abs(Fz - 2000.0) < 1e-6
     assert cli.main(["info", "spindle_tbt_spring"]) == 0
     assert "bearing 4: z =   400.00 mm, facing -1" in capsys.readouterr().out

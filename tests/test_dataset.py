@@ -6,11 +6,12 @@ import h5py
 import numpy as np
 import pytest
 
+from bearingsim.signals import background as bgm
 from bearingsim.case import CaseError, load_case, parse_case, schema_reference_markdown
 from bearingsim.app.cli import main
 from bearingsim.datasets import LABEL_FIELDS, draw_labels, make_dataset
 from bearingsim.errors import NotConvergedError
-from bearingsim.app.workflows import dataset_case, envelope_band
+from bearingsim.app.signal_workflows import dataset_case, envelope_band
 from bearingsim.signals.envelope import envelope_spectrum, peak_frequency
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -295,7 +296,7 @@ def test_pit_depth_rule_reproduces_the_calibrated_depths(tmp_path):
     import h5py
 
     from bearingsim.realism import rig_record as rl
-    from bearingsim.app.workflows import dataset_case
+    from bearingsim.app.signal_workflows import dataset_case
 
     spec = load_case(ROOT / "cases" / "dataset_cwru.toml")
     for k, v in {"dataset.count": 1, "dataset.chunk": 1, "dataset.healthy_fraction": 0.0,
@@ -462,8 +463,8 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
     keys = chunk_keys(lab["key"])
     for i in range(6):
         kb = jax.random.split(ss.stream_key(jax.numpy.asarray(keys[i]), "background"))
-        bg = ss.draw_background(kb[0], fs, st.ranges)
-        want = np.asarray(ss.background_record(kb[1], bg, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, st.knock_max))
+        bg = bgm.draw_background(kb[0], fs, st.ranges)
+        want = np.asarray(bgm.background_record(kb[1], bg, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, st.knock_max))
         assert np.allclose(x3[i] - x2[i], want, atol=3e-6 * max(1.0, np.abs(x3[i]).max()))
         assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
 
@@ -558,7 +559,7 @@ def test_window_dataset_windows_items_of_one_split(files):
 
 
 def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
-    from bearingsim.app import workflows
+    from bearingsim.app import signal_workflows
 
     seen = []
 
@@ -569,7 +570,7 @@ def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
         seen.append(case)
         raise Stop
 
-    monkeypatch.setattr(workflows, "dataset_case", fake)
+    monkeypatch.setattr(signal_workflows, "dataset_case", fake)
     p = tmp_path / "spec.toml"
     p.write_text(spec().text)
     with pytest.raises(Stop):

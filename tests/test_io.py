@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from bearingsim.output import io
+from bearingsim.physics.kinematics import DefectFrequencies
 from bearingsim.app import workflows
 from bearingsim.case import load_case, parse_case
 from bearingsim.errors import OutputError
@@ -47,7 +48,7 @@ def test_static_json_interface(tmp_path):
     assert balls["alpha_inner_deg"][0] == pytest.approx(41.72, abs=0.005)
     assert balls["Q_inner_N"][3] == pytest.approx(2089.6, abs=0.05)
     assert d["stiffness"]["dofs"] == ["x", "y", "axial", "tilt_x", "tilt_y"]
-    assert np.asarray(d["stiffness"]["matrix"]).shape == (5, 5)
+    assert np.asarray(d["stiffness"]["matrix_per_um_mrad"]).shape == (5, 5)
 
 
 def test_sweep_layout(small, sweep, tmp_path):
@@ -119,7 +120,7 @@ def fake_simulation(T=2000, fs=20000.0, Z=9):
         housing_acceleration=np.zeros((T, 2)), sensor_acceleration=np.sin(2 * np.pi * 3000 * t),
         Q_inner=np.ones((T, Z)), Q_outer=np.ones((T, Z)), alpha_inner=np.zeros((T, Z)),
         alpha_outer=np.zeros((T, Z)), jump_times=np.array([0.01, 0.02]), pass_times=np.array([0.015]),
-        frequencies=dict(shaft_Hz=30.0, ftf_Hz=12.0, bpfo_Hz=108.0, bpfi_Hz=162.0, bsf_Hz=70.0),
+        frequencies=DefectFrequencies(shaft=30.0, ftf=12.0, bpfo=108.0, bpfi=162.0, bsf=70.0),
         contact_angle=0.0, result=0, num_steps=T, ball_iterations=2, contact_damping=np.ones(3))
 
 

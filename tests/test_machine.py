@@ -15,7 +15,7 @@ from bearingsim.app.cli import main
 from bearingsim.datasets import make_dataset
 from bearingsim.realism.machine import calibrate_machine
 from bearingsim.realism.records import read_record
-from bearingsim.app.workflows import calibrate_case
+from bearingsim.app.signal_workflows import calibrate_case
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / ".." / "shared" / "realdata"

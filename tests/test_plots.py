@@ -14,7 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from bearingsim.output import plots
-from bearingsim.app import workflows  # noqa: E402
+from bearingsim.physics.kinematics import DefectFrequencies
+from bearingsim.app import signal_workflows, workflows  # noqa: E402
 from bearingsim.case import parse_case  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -72,8 +73,8 @@ def fake_run(sweep):
                            Q_inner=np.asarray(sweep.Q_inner), alpha_outer=np.asarray(sweep.alpha_outer),
                            ring_displacement=np.asarray(sweep.displacement)[:, :3],
                            sensor_acceleration=np.sin(2 * np.pi * 1000 * t), pass_times=t[[20, 40]],
-                           frequencies=dict(shaft_Hz=166.7, ftf_Hz=70.0, bpfo_Hz=1120.0, bpfi_Hz=1500.0,
-                                            bsf_Hz=400.0))
+                           frequencies=DefectFrequencies(shaft=166.7, ftf=70.0, bpfo=1120.0, bpfi=1500.0,
+                                            bsf=400.0))
 
 
 def test_simulation_figures(case, sweep, tmp_path):
@@ -85,7 +86,7 @@ def test_simulation_figures(case, sweep, tmp_path):
 
 def test_compare(case, sweep, tmp_path):
     res = fake_run(sweep)
-    cmp = workflows.Comparison(res, np.arange(0, 61, 2), jax.tree_util.tree_map(lambda a: a[::2], sweep), [])
+    cmp = signal_workflows.Comparison(res, np.arange(0, 61, 2), jax.tree_util.tree_map(lambda a: a[::2], sweep), [])
     fig = plots.plot_compare(cmp, title="small")
     assert "cage angle θ_c (deg) | $Q_o$ (N)" in labels(fig) and "cage angle θ_c (deg) | ring displacement (µm)" in labels(fig)
     ax = fig.axes[0]

@@ -9,7 +9,7 @@ import pytest
 
 import bearingsim.physics.jones
 import bearingsim.physics.sweep
-from bearingsim.app import workflows
+from bearingsim.app import signal_workflows, workflows
 from bearingsim.case import parse_case
 from conftest import beyond_high_shoulder
 from bearingsim.errors import InputError, InvalidStateError, NotConvergedError
@@ -130,14 +130,14 @@ def test_simulate_case_throw(monkeypatch):
     failed = type("R", (), {"result": 1, "num_steps": 77})()
     monkeypatch.setattr(bearingsim.dynamics, "simulate_case", lambda c, **kw: failed)
     with pytest.raises(NotConvergedError, match="sim.toml: the dynamic simulation failed") as e:
-        workflows.simulate_case(case)
+        signal_workflows.simulate_case(case)
     assert "77 steps" in str(e.value) and e.value.hint and e.value.exit_code == 3
-    assert workflows.simulate_case(case, throw=False) is failed
+    assert signal_workflows.simulate_case(case, throw=False) is failed
 
 
 def test_compare_needs_a_dynamics_section():
     with pytest.raises(InputError, match=r"compare needs a \[dynamics\] section"):
-        workflows.compare_case(parse_case(BASE, "c.toml"))
+        signal_workflows.compare_case(parse_case(BASE, "c.toml"))
 
 
 def test_spectrum_file_refuses_other_files(tmp_path):
@@ -146,14 +146,14 @@ def test_spectrum_file_refuses_other_files(tmp_path):
     (tmp_path / "text.h5").write_text("not hdf5")
     for name in ("other.h5", "text.h5", "missing.h5"):
         with pytest.raises(InputError, match="not a bearingsim simulate output"):
-            workflows.spectrum_file(tmp_path / name)
+            signal_workflows.spectrum_file(tmp_path / name)
     with pytest.raises(InputError, match="is a directory"):
-        workflows.spectrum_file(tmp_path)
+        signal_workflows.spectrum_file(tmp_path)
 
 
 def test_envelope_band_around_the_resonance():
-    assert workflows.envelope_band(48000.0, 3000.0) == pytest.approx((2625.0, 3375.0))
-    lo, hi = workflows.envelope_band(4000.0, 3000.0)          # resonance above 0.45 fs: clipped
+    assert signal_workflows.envelope_band(48000.0, 3000.0) == pytest.approx((2625.0, 3375.0))
+    lo, hi = signal_workflows.envelope_band(4000.0, 3000.0)          # resonance above 0.45 fs: clipped
     assert lo == pytest.approx(1800.0 * 0.875) and hi < 2000.0
 
 
@@ -161,15 +161,16 @@ def test_a_set_case_goes_through_the_same_workflows():
     """A case with [set] takes the single-bearing entries (issue 27 item 7): solve_case returns the
     set's state (the same as the set workflow's), info_text adds the set's bearings, and
     static_command says the set's text (no JSON or plot asked: nothing else)."""
-    from bearingsim.app import sets
+    from bearingsim.app import set_workflows as sets
     from bearingsim.case import load_case
+    from bearingsim.output import set_report
     from bearingsim.physics.shaft import SetSolution
 
     case = load_case("harris218_db_medium")
     sol = workflows.solve_case(case)
     assert isinstance(sol, SetSolution) and int(sol.result) == 0
     np.testing.assert_array_equal(np.asarray(sol.displacement), np.asarray(sets.solve_set_case(case).displacement))
-    assert workflows.info_text(case).endswith(sets.set_info_text(case))
+    assert workflows.info_text(case).endswith(set_report.set_info_text(case))
     said = []
     workflows.static_command(case, say=said.append)
-    assert said == [sets.set_text(case, sol)]
+    assert said == [set_report.set_text(case, sol, sets.assess_set_case(case, sol))]
