@@ -299,9 +299,15 @@ class KeptProgram:
                 blob = pickle.loads(path.read_bytes())
                 if blob.get("format") == FORMAT:
                     exp = jax.export.deserialize(bytearray(blob["exported"]))
-                    with _LOCK:
-                        COUNTS["loaded"] += 1
-                    return self._callable(exp, dev), blob["template"]
+                    # a file written by a process whose source changed while it ran (a developer
+                    # editing during a run) can hold another program under this key: its
+                    # arguments must be exactly this call's, else it is traced again
+                    if [(tuple(a.shape), np.dtype(a.dtype)) for a in exp.in_avals] == \
+                            [(tuple(s), np.dtype(t)) for s, t, _ in avals]:
+                        with _LOCK:
+                            COUNTS["loaded"] += 1
+                        return self._callable(exp, dev), blob["template"]
+                    why = "its arguments differ from the call's"
             except Exception as e:      # noqa: BLE001 - any unreadable file is traced again
                 why = type(e).__name__
             print(f"bearingsim: kept program {path.name} of {self._name} unreadable ({why}); "

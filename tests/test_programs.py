@@ -115,6 +115,15 @@ def test_a_warm_process_loads_and_does_not_trace(tmp_path):
     assert again["traced"] == 1 and again["y"] == cold["y"]
     assert "unreadable" in err and "tracing it again" in err
     assert _run(tmp_path)[0]["loaded"] == 1
+    # another program under this key (a process whose source was edited while it ran wrote it):
+    # its arguments differ from the call's, so it is traced again, never run with the wrong ones
+    import pickle
+    spec = jax.ShapeDtypeStruct((2,), np.float64)
+    other = jax.export.export(jax.jit(lambda a, b: a + b))(spec, spec)
+    f.write_bytes(pickle.dumps({"format": programs.FORMAT, "exported": other.serialize(), "template": None}))
+    again, err = _run(tmp_path)
+    assert again["traced"] == 1 and again["y"] == cold["y"]
+    assert "unreadable (its arguments differ" in err
 
 
 def test_the_cache_can_be_switched_off(monkeypatch):
