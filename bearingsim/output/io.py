@@ -16,8 +16,9 @@ import numpy as np
 
 from .._version import __version__
 from ..case import CaseError, parse_case
-from ..case.units import from_si
+from ..case.units import from_si, to_si
 from ..errors import BearingsimError, InputError, OutputError
+from ..physics.kinematics import DefectFrequencies
 
 
 class NonFiniteOutputError(OutputError):
@@ -66,6 +67,44 @@ STATIC_BALL_FIELDS = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer"
                       ("orbital_speed", "rpm"), ("spall_depth", "um"), ("spall_depth_inner", "um"))
 
 
+#: the unit convention of every JSON results file and printout (issue 34), stated in each file
+#: as its ``units`` entry: engineering units, the unit in every key name, as in the case files
+UNITS_NOTE = ("engineering units, the unit in each key name (um, mrad, deg, N, Nm = N m, MPa, rpm, h, Mrev "
+              "= 10^6 revolutions, N_per_um, Nm_per_mrad; '-' or none: a ratio or a count); the stiffness "
+              "matrix in stiffness.units; SI only inside bearingsim (Python results) and in HDF5 files, "
+              "where each dataset has its units attribute")
+#: stiffness in the JSON and the printouts: rows the loads (N, N m), columns the displacements in
+#: the units of RING_DOFS (um, mrad): N/um, N/mrad, N m/um, N m/mrad
+STIFFNESS_JSON_UNITS = ("N/um (force/translation), N/mrad (force/tilt), N m/um (moment/translation), "
+                        "N m/mrad (moment/tilt); row = load [Fx, Fy, Fz, Mx, My], column = displacement "
+                        "[x, y, axial, tilt_x, tilt_y]")
+
+
+def stiffness_to_dict(K) -> dict:
+    """A 5x5 stiffness dR/dq (SI) as the JSON's ``stiffness`` entry: ``dofs``, ``units``, the matrix
+    per um / per mrad of displacement (``matrix_per_um_mrad``) and its diagonal under named keys
+    (``radial_x_N_per_um`` ... ``tilt_y_Nm_per_mrad``), the same for a single bearing, each bearing
+    of a set and the set."""
+    K = np.asarray(K, float)
+    col = np.array([to_si(1.0, unit) for _, unit in RING_DOFS])
+    E = K * col
+    names = ("radial_x_N_per_um", "radial_y_N_per_um", "axial_N_per_um", "tilt_x_Nm_per_mrad", "tilt_y_Nm_per_mrad")
+    return {"dofs": [name for name, _ in RING_DOFS], "units": STIFFNESS_JSON_UNITS, "matrix_per_um_mrad": E,
+            **{n: float(E[i, i]) for i, n in enumerate(names)}}
+
+
+def tilt_note(sol) -> str:
+    """What the state's ``tilt`` (``JonesSolution.tilt``: "free" or "held") means, for the static
+    JSON (``tilt_note``) and text: every output of a state says which model it is."""
+    if getattr(sol, "tilt", "free") == "held":
+        return ("held: the inner ring's tilt is held at 0 (displacement control, operation.tilt = \"held\"); "
+                "the moments in loads are the moments that hold it (the moment sum of the contact forces "
+                "about the ring centre); of the 5x5 stiffness the translational 3x3 block (x, y, axial) "
+                "is the held ring's")
+    return ("free: the inner ring's tilt is force-controlled (operation.tilt = \"free\"): the moments in "
+            "loads are applied and the tilts solved (with no moment a radial load tilts the ring)")
+
+
 def assessment_to_dict(assessment) -> dict:
     """The ``limits`` and ``life`` entries of the ``bearingsim static`` JSON (docs/results.md)."""
     a = assessment
@@ -83,6 +122,7 @@ def assessment_to_dict(assessment) -> dict:
         "slip": bool(L.any_slip),
         "truncated": bool(L.any_truncated),
         "over_shoulder": bool(L.any_over_shoulder),
+        "flags": list(a.flags),
         "balls": {
             "pressure_ratio_inner": arr(L.pressure_ratio_inner), "pressure_ratio_outer": arr(L.pressure_ratio_outer),
             "friction_needed_inner": arr(L.friction_inner), "friction_needed_outer": arr(L.friction_outer),
@@ -106,10 +146,14 @@ def assessment_to_dict(assessment) -> dict:
 
 
 def static_to_dict(sol, bearing=None, assessment=None) -> dict:
-    """The fixed JSON interface of ``bearingsim static`` (units in the key names; stiffness SI);
-    with ``assessment`` (:func:`bearingsim.app.workflows.assess_case`) also ``limits`` and ``life``."""
+    """The fixed JSON interface of ``bearingsim static`` (:data:`UNITS_NOTE`: units in the key
+    names, stiffness per um / mrad: :func:`stiffness_to_dict`); with ``assessment``
+    (:func:`bearingsim.app.workflows.assess_case`) also ``limits`` (with ``flags``) and ``life``."""
     q = np.asarray(sol.displacement)
     d = {
+        "units": UNITS_NOTE,
+        "tilt": getattr(sol, "tilt", "free"),
+        "tilt_note": tilt_note(sol),
         "converged": bool(int(sol.result) == 0),
         "result": int(sol.result),
         "message": sol.message()[0],
@@ -122,12 +166,7 @@ def static_to_dict(sol, bearing=None, assessment=None) -> dict:
                           np.asarray(sol.loads).tolist())),
         "balls": {f"{field}_{unit}": from_si(np.asarray(getattr(sol, field)), unit)
                   for field, unit in STATIC_BALL_FIELDS},
-        "stiffness": {
-            "dofs": ["x", "y", "axial", "tilt_x", "tilt_y"],
-            "units": "N/m (force/translation), N/rad (force/tilt), N m/m (moment/translation), "
-                     "N m/rad (moment/tilt); row = load, column = displacement",
-            "matrix": np.asarray(sol.stiffness),
-        },
+        "stiffness": stiffness_to_dict(sol.stiffness),
     }
     if assessment is not None:
         d.update(assessment_to_dict(assessment))
@@ -254,11 +293,11 @@ def write_study(path, case, study):
 
 def simulation_datasets(res, balls):
     """The fixed ``/dynamics`` layout of ``bearingsim simulate`` (SI)."""
-    attrs = dict(res.frequencies)
+    attrs = {k: float(v) for k, v in res.frequencies.hz().items()}
     attrs.update(
         contact_angle_rad=float(res.contact_angle),
         frequency_note=("ftf = quasi-static cage speed / 2 pi, bpfo = Z ftf; bpfi and bsf (once per "
-                        "ball revolution) from MODEL.md section 8 at the mean loaded contact angle "
+                        "ball revolution) from docs/model.md section 8 at the mean loaded contact angle "
                         "contact_angle_rad"),
         result=int(res.result), num_steps=int(res.num_steps), balls=int(balls),
         ball_iterations=int(res.ball_iterations),
@@ -289,8 +328,9 @@ _FREQUENCIES = ("shaft_Hz", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")
 
 
 def read_simulation(path) -> dict:
-    """Read back a ``bearingsim simulate`` file: dict(time, sensor_acceleration, frequencies
-    {shaft_Hz, ftf_Hz, bpfo_Hz, bpfi_Hz, bsf_Hz}, case: the stored Case or None).  Raises
+    """Read back a ``bearingsim simulate`` file: dict(time, sensor_acceleration, frequencies (a
+    :class:`~bearingsim.physics.kinematics.DefectFrequencies` from the file's shaft_Hz, ftf_Hz,
+    bpfo_Hz, bpfi_Hz, bsf_Hz), case: the stored Case or None).  Raises
     :class:`~bearingsim.errors.InputError` for anything else."""
     import h5py
 
@@ -300,7 +340,7 @@ def read_simulation(path) -> dict:
         with h5py.File(path, "r") as f:
             g = f["dynamics"]
             out = {"time": g["time"][()], "sensor_acceleration": g["sensor_acceleration"][()],
-                   "frequencies": {k: float(g.attrs[k]) for k in _FREQUENCIES}}
+                   "frequencies": DefectFrequencies.from_hz({k: float(g.attrs[k]) for k in _FREQUENCIES})}
             toml = f.attrs.get("case_toml", "")
     except (OSError, KeyError) as e:
         raise InputError(f"{path}: not a bearingsim simulate output ({e})") from None

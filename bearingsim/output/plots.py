@@ -6,7 +6,7 @@ import numpy as np
 
 from ..case.units import from_si
 from ..physics.defect import depth_profile
-from ..signals.envelope import defect_markers, fault_lines
+from ..signals.lines import defect_markers, fault_lines
 from .plots_signal import plot_envelope_spectrum, plot_time_history
 
 C_IN, C_OUT = "#1f77b4", "#d62728"
@@ -54,7 +54,7 @@ def _shade_azimuth(ax, span, label=True):
 
 
 def polar_loads(ax, sol, spall=None, title="Ball loads"):
-    """Polar load distribution: Q_i and Q_o at each ball azimuth (frame of MODEL.md: 0 deg = +x)."""
+    """Polar load distribution: Q_i and Q_o at each ball azimuth (frame of docs/model.md: 0 deg = +x)."""
     psi = np.asarray(sol.azimuth)
     order = np.argsort(np.mod(psi, 2 * np.pi))
     psi = np.mod(psi, 2 * np.pi)[order]
@@ -97,7 +97,7 @@ def plot_static(sol, title="", spall=None, path=None):
     tx, ty = from_si(np.asarray(sol.displacement[3:]), "mrad")
     rpm = from_si(float(sol.cage_speed), "rpm")
     ax.set_title(f"ring: x {x:.2f} µm, y {y:.2f} µm, axial {z:.2f} µm, "
-                 f"tilt {tx:.3f}/{ty:.3f} mrad; cage {rpm:.0f} rpm", fontsize=9)
+                 f"tilt {tx:.3f}/{ty:.3f} mrad ({getattr(sol, 'tilt', 'free')}); cage {rpm:.0f} rpm", fontsize=9)
     return _finish(fig, title, path, dpi=130)
 
 
@@ -313,7 +313,7 @@ def plot_simulation(res, outdir, title="", bearing=None, spall=None, spectrum=No
 
 def plot_compare(comparison, title="", path=None):
     """Dynamic run against the quasi-static sweep at its cage angles (a
-    :class:`bearingsim.app.workflows.Comparison`): Q_o, Q_i, alpha_o of the ball whose load varies
+    :class:`bearingsim.app.signal_workflows.Comparison`): Q_o, Q_i, alpha_o of the ball whose load varies
     most, and the ring displacement, against the cage angle."""
     res, idx, qs = comparison.dynamic, comparison.indices, comparison.quasi_static
     th = from_si(np.unwrap(np.asarray(res.cage_angle)), "deg")

@@ -12,7 +12,7 @@ from ..physics.hertz import hertz_contact
 from ..physics.kinematics import ball_kinematics, defect_frequencies
 from .io import RING_DOFS
 
-__all__ = ["table", "quantity", "info_text", "static_text", "limits_text", "study_text", "compare_text", "spectrum_text"]
+__all__ = ["table", "quantity", "info_text", "static_text", "tilt_text", "stiffness_text", "limits_summary", "limits_text", "study_text", "compare_text", "spectrum_text"]
 
 
 
@@ -83,13 +83,13 @@ def info_text(case) -> str:
         size = (f"extent {quantity(sp.extent, 'deg', '.3f')} (arc {quantity(sp.length(b), 'mm', '.4f')}), "
                 f"depth {quantity(sp.depth, 'mm', '.4f')}, {sp.profile}")
         if sp.location == "ball":
-            out += ["", f"Pit on ball {sp.ball} (MODEL.md 9)",
+            out += ["", f"Pit on ball {sp.ball} (docs/model.md section 9)",
                     f"  spin angle from the outer contact {quantity(sp.center, 'deg', '.2f')}, {size}",
                     f"  impacts: once per ball turn on each raceway, 2 BSF = {v['two_bsf']:.3f} Hz in total "
                     f"(BSF {v['bsf']:.3f} Hz), modulated at FTF = {v['ftf']:.3f} Hz "
                     f"(lines 2 BSF +/- FTF: {v['two_bsf'] - v['ftf']:.3f}, {v['two_bsf'] + v['ftf']:.3f} Hz)"]
         elif sp.location == "inner":
-            out += ["", "Spall on the inner raceway (turns with the inner ring, MODEL.md 9)",
+            out += ["", "Spall on the inner raceway (turns with the inner ring, docs/model.md section 9)",
                     f"  centre at t = 0 {quantity(sp.center, 'deg', '.2f')}, {size}",
                     f"  impacts at BPFI = {v['bpfi']:.3f} Hz, modulated at the shaft frequency "
                     f"{v['shaft']:.3f} Hz (lines BPFI +/- f_r: {v['bpfi'] - v['shaft']:.3f}, "
@@ -110,6 +110,7 @@ def static_text(case, sol, assessment=None) -> str:
              f"converged in {int(sol.iterations)} iterations, ring residual {float(sol.residual_norm):.2e} N",
              "ring displacement: " + ", ".join(f"{name} {quantity(v, unit, '.4f' if unit == 'um' else '.5f')}"
                                                for (name, unit), v in zip(RING_DOFS, q)),
+             tilt_text(sol),
              f"cage speed {quantity(sol.cage_speed, 'rpm', '.2f')}", ""]
     columns = (("azimuth", "deg"), ("alpha_inner", "deg"), ("alpha_outer", "deg"), ("Q_inner", "N"),
                ("Q_outer", "N"), ("delta_inner", "um"), ("delta_outer", "um"), ("centrifugal", "N"),
@@ -121,12 +122,51 @@ def static_text(case, sol, assessment=None) -> str:
                         "M_g N m", "p_i MPa", "p_o MPa"), rows,
                        ("{}", "{:.2f}", "{:.3f}", "{:.3f}", "{:.1f}", "{:.1f}", "{:.3f}", "{:.3f}", "{:.2f}",
                         "{:.4f}", "{:.0f}", "{:.0f}")))
-    lines += ["", "stiffness diagonal: "
-              f"k_x {K[0,0]:.4e} N/m, k_y {K[1,1]:.4e} N/m, k_axial {K[2,2]:.4e} N/m, "
-              f"k_tilt_x {K[3,3]:.4e} N m/rad, k_tilt_y {K[4,4]:.4e} N m/rad"]
+    lines += ["", stiffness_text(K)]
     if assessment is not None:
         lines.append(limits_text(assessment))
     return "\n".join(lines)
+
+
+def tilt_text(sol) -> str:
+    """One line: the state's tilt model (``JonesSolution.tilt``) and its moments (applied, or, for
+    a held tilt, the moments that hold it)."""
+    M = np.asarray(sol.loads)[3:5]
+    if getattr(sol, "tilt", "free") == "held":
+        return (f"tilt: held at 0 (operation.tilt = \"held\"); moments holding it Mx {M[0]:.4g} N m, "
+                f"My {M[1]:.4g} N m; the held ring's stiffness is the x, y, axial block")
+    return (f"tilt: free (operation.tilt = \"free\"): moments applied Mx {M[0]:.4g} N m, My {M[1]:.4g} N m, "
+            "tilts solved")
+
+
+def stiffness_text(K, what="stiffness diagonal") -> str:
+    """The diagonal of a 5x5 stiffness dR/dq (SI) in the printouts' units (N/um, N m/mrad: the
+    JSON's, :data:`bearingsim.output.io.UNITS_NOTE`), for a single bearing and a set alike."""
+    K = np.asarray(K, float)
+    t, r = (lambda v: from_si(float(v), "N_per_um")), (lambda v: from_si(float(v), "Nm_per_mrad"))
+    return (f"{what}: k_x {t(K[0, 0]):.5g} N/um, k_y {t(K[1, 1]):.5g} N/um, k_axial {t(K[2, 2]):.5g} N/um, "
+            f"k_tilt_x {r(K[3, 3]):.5g} N m/mrad, k_tilt_y {r(K[4, 4]):.5g} N m/mrad")
+
+
+def limits_summary(limits) -> str:
+    """One line: the limits a state breaks (flags P, S, T, X of :func:`limits_text`), or that all
+    are within; the same line for a single bearing and each bearing of a set."""
+    L = limits
+    deg = lambda x: from_si(np.asarray(x), "deg")
+    summary = []
+    if bool(L.any_overpressure):
+        summary.append(f"pressure above the limit (max {float(L.max_pressure_ratio):.3f} x)")
+    if bool(L.any_slip):
+        summary.append(f"raceway control needs {float(L.max_friction_ratio):.2f} x the available friction")
+    if bool(L.any_over_shoulder):
+        summary.append("a loaded contact centred over a shoulder edge (flag X: outside the model for that ball; "
+                       "refused for a healthy bearing)")
+    if bool(L.any_truncated):
+        summary.append(f"contact ellipse truncated by a shoulder (by {-float(deg(L.min_edge_margin)):.2f} deg)")
+    return "limits: " + ("; ".join(summary) if summary else "all within (max p/limit "
+                                                            f"{float(L.max_pressure_ratio):.3f}, max mu need/available "
+                                                            f"{float(L.max_friction_ratio):.3f}, min edge margin "
+                                                            f"{float(deg(L.min_edge_margin)):.2f} deg)")
 
 
 def limits_text(assessment) -> str:
@@ -143,7 +183,7 @@ def limits_text(assessment) -> str:
              float(deg(L.edge_high_inner)[j]), float(deg(L.edge_low_inner)[j]), float(deg(L.edge_high_outer)[j]),
              float(deg(L.edge_low_outer)[j]), flags(j) or "-") for j in range(mu.shape[-1])]
     loaded_edges = lambda v: "-" if v >= 179.0 else f"{v:.2f}"
-    lines = ["", f"Limits (MODEL.md 11): p_max / {from_si(float(st['pressure_limit']), 'MPa'):.0f} MPa, friction "
+    lines = ["", f"Limits (docs/model.md section 11): p_max / {from_si(float(st['pressure_limit']), 'MPa'):.0f} MPa, friction "
              f"raceway control needs (available {mu_av:g}), contact ellipse to the shoulder edges "
              "(deg; negative: over the edge)",
              table(("ball", "p_i/lim", "p_o/lim", "mu need", "edge i hi", "edge i lo", "edge o hi", "edge o lo",
@@ -153,20 +193,7 @@ def limits_text(assessment) -> str:
                    ("{}", "{:.3f}", "{:.3f}", "{:.4f}", "{}", "{}", "{}", "{}", "{}")),
              "flags: P pressure above the limit, S raceway control needs more friction than available "
              "(the ball slips), T ellipse truncated by a shoulder, X contact centre over a shoulder edge"]
-    summary = []
-    if bool(L.any_overpressure):
-        summary.append(f"pressure above the limit (max {float(L.max_pressure_ratio):.3f} x)")
-    if bool(L.any_slip):
-        summary.append(f"raceway control needs {float(L.max_friction_ratio):.2f} x the available friction")
-    if bool(L.any_over_shoulder):
-        summary.append("a loaded contact centred over a shoulder edge (flag X: outside the model for that ball; "
-                       "refused for a healthy bearing)")
-    if bool(L.any_truncated):
-        summary.append(f"contact ellipse truncated by a shoulder (by {-float(deg(L.min_edge_margin)):.2f} deg)")
-    lines.append("limits: " + ("; ".join(summary) if summary else "all within (max p/limit "
-                                                                   f"{float(L.max_pressure_ratio):.3f}, max mu need/available "
-                                                                   f"{float(L.max_friction_ratio):.3f}, min edge margin "
-                                                                   f"{float(deg(L.min_edge_margin)):.2f} deg)"))
+    lines.append(limits_summary(L))
     if st["dynamic_load_rating"] is not None:
         C = from_si(float(st["dynamic_load_rating"]), "kN")
         if a.rating_life is None:
@@ -219,12 +246,22 @@ def spectrum_text(analysis) -> str:
               ("{}", "{:.3f}", "{:.3f}", "{:.4g}", "{:+.4f}"))])
 
 
+def _record_part(cal) -> str:
+    """The record's length and rate, and the part the machine fits analysed when it was cut
+    (at most background_fit.MAX_ANALYSIS_SAMPLES samples)."""
+    whole = getattr(cal, "record_s", None)
+    if whole is None or whole <= cal.duration_s * (1 + 1e-9):
+        return f"{cal.duration_s:.2f} s at {cal.sample_rate_Hz:g} Hz"
+    return (f"{whole:.2f} s at {cal.sample_rate_Hz:g} Hz, the first {cal.duration_s:.2f} s analysed (at most "
+            f"{round(cal.duration_s * cal.sample_rate_Hz)} samples: the memory stays bounded)")
+
+
 def calibration_text(cal, output=None) -> str:
     """What ``bearingsim calibrate`` fitted (bearingsim.realism.machine.MachineCalibration)."""
     bg = cal.background
     mm = lambda v: ", ".join(f"{a:.4g}" for a in v) or "-"
     lines = [f"{cal.case.title}",
-             f"record: {cal.duration_s:.2f} s at {cal.sample_rate_Hz:g} Hz; shaft {60 * cal.shaft_hz:.1f} rpm "
+             f"record: {_record_part(cal)}; shaft {60 * cal.shaft_hz:.1f} rpm "
              f"({cal.shaft_hz:.3f} Hz, {cal.shaft_source})",
              f"shaft lines k = 1..{len(bg.shaft_amplitudes)}: {mm(bg.shaft_amplitudes)} m/s^2",
              (f"supply {bg.line_frequency:g} Hz ({cal.line_excess_db:.1f} dB over the floor), lines: "
@@ -253,17 +290,25 @@ def calibration_text(cal, output=None) -> str:
 
 
 def record_spectrum_text(rs) -> str:
-    """A record's sampling, shaft speed, band and the strength of each fault line over the
-    envelope spectrum's floor (bearingsim.realism.record_spectrum.RecordSpectrum)."""
-    rows = [(k, f0, *rs.strengths[k]) for k, f0 in rs.lines.items()]
+    """A record's sampling, shaft speed, band, the strength of each fault line over the envelope
+    spectrum's local floor and its detection verdict at the stated false-alarm rate
+    (bearingsim.realism.record_spectrum.RecordSpectrum)."""
+    v = rs.verdicts
+    rows = [(k, f0, v[k].peak_hz, v[k].strength_db, v[k].threshold_db, v[k].verdict + (f" ({v[k].note})" if v[k].note
+                                                                                    else ""))
+            for k, f0 in rs.lines.items()]
+    found = [k for k in rs.lines if v[k].detected]
     out = [f"{rs.source}{f' channel {rs.channel}' if rs.channel else ''}: {rs.samples} samples at "
-           f"{rs.sample_rate:g} Hz ({rs.samples / rs.sample_rate:.3f} s), unit {rs.unit}",
+           f"{rs.sample_rate:g} Hz ({rs.samples / rs.sample_rate:.3f} s; sample rate from {rs.rate_source}), "
+           f"unit {rs.unit}",
            f"bearing: {rs.case_title}; shaft {60 * rs.shaft_hz:.1f} rpm ({rs.shaft_hz:.3f} Hz, {rs.shaft_source})",
            f"squared-envelope spectrum in the band of largest envelope kurtosis "
            f"{rs.band[0]:.0f}-{rs.band[1]:.0f} Hz, resolution {rs.envelope.resolution:.3f} Hz",
-           table(("line", "expected Hz", "peak Hz", "dB over floor"), rows,
-                 ("{}", "{:.3f}", "{:.3f}", "{:.1f}")),
-           "(a line over ~10 dB stands out of the envelope's floor: the median between 1 and 20 x the shaft)"]
+           table(("line", "expected Hz", "peak Hz", "dB over floor", "threshold dB", "verdict"), rows,
+                 ("{}", "{:.3f}", "{:.3f}", "{:.1f}", "{:.1f}", "{}")),
+           ("fault lines detected: " + ", ".join(found)) if found else "no fault line detected",
+           f"(dB over the local floor: the median of the envelope spectrum within 6 x the line's search window; "
+           f"{rs.threshold_note})"]
     if rs.overlay is not None:
         ov = rs.overlay
         out.append(f"overlay: {ov.source} at {ov.sample_rate:g} Hz, band {ov.band[0]:.0f}-{ov.band[1]:.0f} Hz"
