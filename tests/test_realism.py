@@ -199,6 +199,7 @@ def cwru_runs():
     from pathlib import Path
 
     from bearingsim import dynamics as dyn
+    from bearingsim.app import signal_workflows
     from bearingsim.case import load_case
 
     case = load_case(Path(__file__).resolve().parents[1] / "cases" / "cwru_6205.toml")
@@ -207,7 +208,8 @@ def cwru_runs():
     off = on._replace(pass_amplitude_cv_max_percent=0.0, pass_delay_sd_max_percent=0.0)
     kw = dict(params=dyn.DynamicsParameters.from_settings(d), duration=0.04, sample_rate=24000.0,
               seed=5, record_balls=False)
-    return case, on, dyn.simulate_case(case, realism=on, **kw), dyn.simulate_case(case, realism=off, **kw)
+    return (case, on, signal_workflows.simulate_case(case, throw=False, realism=on, **kw),
+            signal_workflows.simulate_case(case, throw=False, realism=off, **kw))
 
 
 def test_engine_pass_variability_scales_with_the_unbridged_fraction(cwru_runs):

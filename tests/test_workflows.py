@@ -128,7 +128,7 @@ def test_simulate_case_throw(monkeypatch):
 
     case = parse_case(BASE, "sim.toml")
     failed = type("R", (), {"result": 1, "num_steps": 77})()
-    monkeypatch.setattr(bearingsim.dynamics, "simulate_case", lambda c, **kw: failed)
+    monkeypatch.setattr(bearingsim.dynamics, "simulate", lambda *a, **kw: failed)
     with pytest.raises(NotConvergedError, match="sim.toml: the dynamic simulation failed") as e:
         signal_workflows.simulate_case(case)
     assert "77 steps" in str(e.value) and e.value.hint and e.value.exit_code == 3

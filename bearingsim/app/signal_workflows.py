@@ -36,16 +36,29 @@ __all__ = ["simulate_case", "compare_case", "dataset_case", "spectrum_file", "ca
 
 # ------------------------------------------------------------------------------- dynamics
 def simulate_case(case, *, throw=True, progress=None, **kw):
-    """The dynamic simulation of the case's ``[dynamics]`` (``bearingsim.dynamics.simulate_case``).
-    Raises CaseError (an InputError) for a sample rate below twice the highest characteristic
-    frequency of the case (:func:`bearingsim.case.check_sampling`)."""
+    """The dynamic simulation of the case: :func:`bearingsim.dynamics.simulate` with everything
+    the case says (bearing, operating point, loads, defect, cage angle, Hertz method and its
+    ``[dynamics]``: duration, sample rate, seed, structure, realism); any keyword of ``simulate``
+    (``duration``, ``sample_rate``, ``seed``, ``params``, ``realism``, ...) overrides it.  The one
+    place a simulation reads a case (the dynamics know nothing of cases).  Raises CaseError (an
+    InputError) for a sample rate below twice the highest characteristic frequency of the case
+    (:func:`bearingsim.case.check_sampling`)."""
     # local: importing the dynamics (and the data set engine, below) costs ~0.5 s of JAX set-up,
     # which only simulate, compare and dataset need: info, static, sweep and study start without it
     from .. import dynamics
 
     free_tilt_only(case, "the dynamic simulation")
     check_sampling(case)
-    res = dynamics.simulate_case(case, progress=progress, throw=False, **kw)
+    d = case.dynamics_settings()
+    kw.setdefault("realism", dynamics.Realism.from_settings(d))
+    kw.setdefault("theta0", case.cage_angle)
+    kw.setdefault("seed", d.get("seed", 0))
+    kw.setdefault("hertz_method", case.hertz_method)
+    duration = kw.pop("duration", d["duration"])
+    sample_rate = kw.pop("sample_rate", d["sample_rate"])
+    params = kw.pop("params", dynamics.DynamicsParameters.from_settings(d))
+    res = dynamics.simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration,
+                            sample_rate, progress=progress, throw=False, **kw)
     if throw and int(res.result) != 0:
         code = dynamics.RESULTS(int(res.result))
         raise dynamics.DynamicsError(f"{case.source}: the dynamic simulation failed: {code.message} after "

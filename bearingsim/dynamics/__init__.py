@@ -41,7 +41,7 @@ from .integrate import CHUNK, SCHEMES, edge_fractions, motion_stages, run_adapti
 
 # ------------------------------------------------------------------------- entry points
 from .frequencies import characteristic_frequencies, spin_ratio, state_frequencies
-from .simulate import (DynamicsResult, ball_records, load_zone_centre, simulate, simulate_case, unbridged_of,
+from .simulate import (DynamicsResult, ball_records, load_zone_centre, simulate, unbridged_of,
                        finish_record)
 from .program import MENU, MOTION_STREAM, ChunkProgram, chunk_program, item_keys, iterations_needed, menu_iterations
 from .batch import batch_settings, defect_slots, extreme_items
@@ -56,7 +56,7 @@ __all__ = [
     "DynamicModel", "build_model", "initial_state", "linear_modes", "choose_substeps",
     "measurement_noise", "sensor_filter", "PassSettings", "pass_variability",
     "CHUNK", "SCHEMES", "run_fixed", "run_adaptive", "time_grid", "stage_grid", "motion_stages", "edge_fractions",
-    "DynamicsResult", "characteristic_frequencies", "spin_ratio", "state_frequencies", "ball_records", "simulate", "simulate_case",
+    "DynamicsResult", "characteristic_frequencies", "spin_ratio", "state_frequencies", "ball_records", "simulate",
     "load_zone_centre", "unbridged_of", "finish_record",
     "batch_settings", "defect_slots", "extreme_items",
     "motion_ok", "knot_count", "crossings", "defect_times", "pass_count",

@@ -34,8 +34,7 @@ from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_m
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "slip_reference",
-           "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "finish_record", "simulate",
-           "simulate_case"]
+           "rectangular", "ball_records", "load_zone_centre", "unbridged_of", "finish_record", "simulate"]
 
 
 def slip_reference(defects):
@@ -329,18 +328,3 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         contact_damping=np.asarray(model.contact_damping), ball_iterations=int(ball_iterations),
         substeps=substeps, scheme=scheme, realism=labels, shaft_angle=phi, spin_ratio=k_spin,
         ball_solver_stats=solver_stats)
-
-
-def simulate_case(case, progress=None, throw=True, **kw) -> DynamicsResult:
-    """:func:`simulate` with everything taken from a :class:`bearingsim.case.Case`; any keyword
-    of :func:`simulate` (``duration``, ``sample_rate``, ``seed``, ``params``, ...) overrides it."""
-    d = case.dynamics_settings()
-    kw.setdefault("realism", Realism.from_settings(d))
-    kw.setdefault("theta0", case.cage_angle)
-    kw.setdefault("seed", d.get("seed", 0))
-    kw.setdefault("hertz_method", case.hertz_method)
-    duration = kw.pop("duration", d["duration"])
-    sample_rate = kw.pop("sample_rate", d["sample_rate"])
-    params = kw.pop("params", DynamicsParameters.from_settings(d))
-    return simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration,
-                    sample_rate, progress=progress, throw=throw, **kw)
