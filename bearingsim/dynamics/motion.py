@@ -38,11 +38,12 @@ import numpy as np
 
 from ..physics.defect import as_defects
 from ..keys import STREAMS
+from ..programs import jit
 from .parameters import Realism
 
 __all__ = ["Motion", "draw_motion", "motion_at", "motion_ok", "knot_count", "MOTION_STREAM", "crossings",
            "crossing_grid", "pass_count", "defect_times", "motion_labels", "pad_knots", "defect_edge_times",
-           "defect_pass_times", "run_labels", "FLUCTUATION_TERMS"]
+           "defect_pass_times", "run_labels", "run_motion_at", "FLUCTUATION_TERMS"]
 
 #: sinusoids in the speed fluctuation
 FLUCTUATION_TERMS = 8
@@ -238,28 +239,39 @@ def pad_knots(m: Motion, block=256) -> Motion:
     n = int(block) * (ku.size // int(block) + 1)
     extra = np.arange(1, n - ku.size + 1, dtype=float)
     ku, kp = np.concatenate([ku, ku[-1] + extra]), np.concatenate([kp, kp[-1] + extra])
-    z = jnp.zeros(n - 1)
-    return m._replace(knots_u=jnp.asarray(ku), knots_p=jnp.asarray(kp), slip_draws=z, inside=z.astype(bool))
+    z = np.zeros(n - 1)
+    return m._replace(knots_u=jnp.asarray(ku), knots_p=jnp.asarray(kp), slip_draws=jnp.asarray(z),
+                      inside=jnp.asarray(z.astype(bool)))
+
+
+#: one run's motion at its samples, and its defect times: compiled programs (kept, loaded warm),
+#: not op-by-op dispatch (each eager op is a small program of its own)
+run_motion_at = jit(motion_at)
+
+
+def _defect_times_only(m, Z, defects, spin_ratio, duration, count, offsets):
+    return defect_times(m, Z, defects, spin_ratio, duration, count, offsets)[0]
+
+
+_defect_times_jit = jit(_defect_times_only)
 
 
 def _times(m: Motion, Z, spalls, duration, spin_ratio, offsets):
-    out = [np.zeros(0)]
-    for sp in as_defects(spalls):
-        if sp is None or not float(sp.depth) > 0.0:
-            continue
-        # the list's length: the phase's whole span in periods, plus margin (eager, one run)
-        tt = jnp.linspace(0.0, float(duration), 65)
-        theta, phi, _ = motion_at(m, Z, tt)
+    active = tuple(sp for sp in as_defects(spalls) if sp is not None and float(sp.depth) > 0.0)
+    if not active:
+        return np.zeros(0)
+    # the list's length: the largest phase span over the run in periods, plus margin, rounded up
+    # to a power of two (few programs)
+    theta, phi, _ = (np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(np.linspace(0.0, float(duration), 65))))
+    need = 0
+    for sp in active:
         span = {"outer": theta, "inner": theta - phi, "ball": float(spin_ratio) * phi}[sp.location]
         period = np.pi if sp.location == "ball" else 2 * np.pi / Z
-        count = int(np.ceil(float(jnp.max(span) - jnp.min(span)) / period)) + 4
-        h = 0.5 * float(sp.extent)
-        for o in offsets:
-            t, _ = crossings(m, Z, sp.location, jnp.float64(float(sp.center)), jnp.float64(float(spin_ratio)),
-                             {"lo": -h, "mid": 0.0, "hi": h}[o], float(duration), count)
-            t = np.asarray(t)
-            out.append(t[np.isfinite(t)])
-    return np.unique(np.concatenate(out))
+        need = max(need, int(np.ceil(float(np.ptp(span)) / period)) + 4)
+    count = 1 << max(need - 1, 7).bit_length()
+    t = np.asarray(_defect_times_jit(m, Z, active, jnp.float64(float(spin_ratio)), float(duration), count,
+                                     tuple(offsets)))
+    return np.unique(t[np.isfinite(t)])
 
 
 def defect_edge_times(m: Motion, Z, spalls, duration, spin_ratio=0.0):

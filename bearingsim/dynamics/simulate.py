@@ -29,8 +29,8 @@ from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_
 from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
 from ..keys import item_keys, stream_key
-from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, motion_at,
-                     run_labels)
+from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, run_labels,
+                     run_motion_at)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "slip_reference",
@@ -267,7 +267,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     Z = bearing.n_balls
     m = _motion_from_key(key, Z, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
                          slip_reference(defects), realism, n_knots)
-    st0 = jnp.stack(motion_at(m, Z, jnp.zeros(())), -1)
+    st0 = jnp.asarray(np.stack([np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(np.zeros(1)))], -1)[0])
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
         substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
@@ -303,7 +303,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         extra = f" (quasi-static: {sol.message()[0]}, result {q_code})" if q_code else ""
         hint = result_hint(q_code, loads, bearing=bearing) if q_code else code.hint
         raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", hint, code)
-    theta, phi, omega = (np.asarray(v) for v in motion_at(m, Z, jnp.asarray(ts)))
+    theta, phi, omega = (np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(ts)))
     rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
     balls = [None] * 4
     if record_balls and code == RESULTS.successful:
