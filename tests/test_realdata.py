@@ -18,7 +18,7 @@ from bearingsim.signals.lines import record_metrics
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO / ".." / "shared" / "realdata"
-REFERENCE_MD = REPO / "docs" / "reference-data.md"
+REFERENCE_MD = REPO / "docs/reference-data.md"
 BPFO_ORDER = 3.5848                      # nominal CWRU multiplier (docs/reference-data.md)
 
 pytestmark = pytest.mark.skipif(
