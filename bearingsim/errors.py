@@ -27,6 +27,9 @@ import enum
 
 __all__ = [
     "ResultCode",
+    "SUCCESSFUL",
+    "succeeded",
+    "failed",
     "BearingsimError",
     "InputError",
     "InputTypeError",
@@ -56,6 +59,24 @@ class ResultCode(enum.IntEnum):
     def describe(self) -> str:
         """``message`` followed by the hint, for people."""
         return f"{self.message}. Hint: {self.hint}" if self.hint else self.message
+
+
+#: the value of the ``successful`` member of every :class:`ResultCode` enumeration (the solvers',
+#: the set's, the dynamics', a data set's ``DatasetResult``; tests/test_verdicts.py checks each)
+SUCCESSFUL = 0
+
+
+def succeeded(result):
+    """Where ``result`` (a code, or a NumPy / JAX array of codes of any :class:`ResultCode`
+    enumeration) is its enumeration's ``successful`` member: a bool or a boolean array, traceable
+    under ``jit``.  The one place a result code is compared; read a failed code's reason with
+    ``RESULTS.of(code).message`` / ``.hint``."""
+    return result == SUCCESSFUL
+
+
+def failed(result):
+    """Where ``result`` (as :func:`succeeded`) is any other member: the item failed, with a reason."""
+    return result != SUCCESSFUL
 
 
 class BearingsimError(Exception):

@@ -2,6 +2,8 @@
 from the edge (cases, files, plots, command line, workflows, data sets), and no module (tests
 included) imports another bearingsim module's private names.  Read from the source with ast."""
 import ast
+import re
+import tokenize
 from pathlib import Path
 
 import pytest
@@ -15,7 +17,7 @@ FOLDERS = {
     "physics": set(),
     "dynamics": {"physics"},
     "signals": {"physics", "dynamics"},
-    "case": {"physics"},
+    "case": {"physics", "dynamics", "signals"},    # the built scenario holds DynamicsParameters, Background
     "output": {"physics", "signals", "dynamics", "case"},
     "datasets": {"physics", "signals", "dynamics", "case", "output"},
     "realism": {"physics", "signals", "dynamics", "case", "output", "datasets"},
@@ -429,3 +431,56 @@ def test_modules_stay_small():
             if len(p.read_text(encoding="utf-8").splitlines()) > MAX_LINES}
     assert long <= LONG_MODULES, f"over {MAX_LINES} lines: {sorted(long - LONG_MODULES)} (split by job)"
     assert len(LONG_MODULES) <= 3
+
+
+#: the modules that take a built scenario (``case.build()``, issue 35 item 1): the data set engine,
+#: the signal workflows, the rig records, identify and the record spectra read its fields, never the
+#: case API (the case's accessors build a new object at every call; a scenario is built once)
+SCENARIO_TAKERS = ("datasets/spec.py", "datasets/program.py", "datasets/runner.py", "datasets/writer.py",
+                   "app/signal_workflows.py", "app/set_workflows.py", "realism/rig_record.py", "realism/identify.py",
+                   "realism/record_spectrum.py")
+CASE_API = re.compile(r"\.(dynamics_settings|dataset_settings|limits_settings|sweep_settings|bearing|operation|loads|"
+                      r"spall|bearing_set)\(\)|\.si\(|\.data\[|\.data\.get\(|\.raw\b")
+
+
+def test_the_engine_takes_a_built_scenario_not_the_case_api():
+    bad = []
+    for rel in SCENARIO_TAKERS:
+        for n, line in enumerate((PACKAGE / rel).read_text().splitlines(), 1):
+            code = line.split("#")[0]
+            if CASE_API.search(code) and not code.strip().startswith(('"', "'", "``")):
+                bad.append(f"{rel}:{n}: {line.strip()}")
+    assert not bad, "the case API read below a workflow's entry (take the Scenario's fields):\n" + "\n".join(bad)
+
+
+#: a result code compared by hand with an integer (issue 35 item 3): use errors.succeeded / failed
+HAND_COMPARED = re.compile(r"result\b[\s\"'\]\)]*[!=]=\s*\d")
+
+
+def code_only(path: Path) -> dict:
+    """line -> the line's code with every string literal emptied and comments dropped (tokenize)."""
+    out = {}
+    with open(path, "rb") as fh:
+        for tok in tokenize.tokenize(fh.readline):
+            if tok.type in (tokenize.COMMENT, tokenize.ENCODING, tokenize.NL, tokenize.NEWLINE):
+                continue
+            text = '""' if tok.type == tokenize.STRING or tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1) \
+                else tok.string
+            out[tok.start[0]] = out.get(tok.start[0], "") + " " + text
+    return out
+
+
+def test_the_code_scanner_skips_strings_and_comments(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text('"""result != 0 in a docstring"""\nx = sol.result != 0  # result == 0\ny = "result == 0"\n')
+    lines = code_only(f)
+    assert [n for n, c in lines.items() if HAND_COMPARED.search(c)] == [2]
+
+
+def test_result_codes_are_not_compared_with_integers_by_hand():
+    bad = []
+    for p in PACKAGE.rglob("*.py"):
+        for n, code in code_only(p).items():
+            if HAND_COMPARED.search(code):
+                bad.append(f"{p.relative_to(ROOT)}:{n}: {code.strip()}")
+    assert not bad, "result codes compared with integers (use bearingsim.errors.succeeded / failed):\n" + "\n".join(bad)

@@ -458,8 +458,8 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
 
     from bearingsim.signals import signal_stage as ss
     from bearingsim.datasets import Physics, chunk_keys, signal_settings
-    bcase = spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\nbackground_rms_m_s2 = [0.5, 0.5]\n')
-    st = signal_settings(bcase, bcase.data["dataset"], fs, x3.shape[1], Physics.of_case(bcase))
+    bsc = spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\nbackground_rms_m_s2 = [0.5, 0.5]\n').build()
+    st = signal_settings(bsc, bsc.dataset, fs, x3.shape[1], Physics.of_scenario(bsc))
     keys = chunk_keys(lab["key"])
     for i in range(6):
         kb = jax.random.split(ss.stream_key(jax.numpy.asarray(keys[i]), "background"))

@@ -257,3 +257,18 @@ def test_dynamic_equilibrium_of_a_deep_groove_bearing_under_a_small_axial_load(F
     x = jnp.concatenate([y0[:2] - y0[3:5], y0[2:3]])            # shaft relative to the housing
     r = np.asarray(model.ring_load(x, stage0)) - np.asarray(F[:3])
     assert np.max(np.abs(r)) <= 1e-9 * (Fr + 1.0)
+
+
+def test_every_result_enumeration_succeeds_at_the_one_value():
+    """``errors.succeeded`` / ``failed`` compare with ``errors.SUCCESSFUL``: every enumeration's
+    ``successful`` member has that value, and every other member is a failure."""
+    from bearingsim.datasets import DatasetResult
+    from bearingsim.dynamics import RESULTS as DYN
+    from bearingsim.errors import SUCCESSFUL, failed, succeeded
+    from bearingsim.physics.jones import RESULTS as JONES
+
+    for enum in (JONES, DYN, DatasetResult):
+        assert int(enum.successful) == SUCCESSFUL and succeeded(enum.successful)
+        assert all(failed(m) for m in enum if m is not enum.successful)
+        codes = np.array([int(m) for m in enum])
+        assert np.array_equal(succeeded(codes), codes == int(enum.successful))

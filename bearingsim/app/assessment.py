@@ -19,6 +19,7 @@ import numpy as np
 from ..physics import life
 from ..physics.limits import contact_limits
 from ..programs import jit
+from ..errors import succeeded
 
 __all__ = ["Assessment", "assess_state", "FLAGS"]
 
@@ -74,7 +75,7 @@ def assess_state(bearing, op, sol, settings: dict, *, healthy: bool = True) -> A
     alpha = float(bearing.free_contact_angle) if bool(bearing.angular_contact) else 0.0
     L = rings = hours = None
     C = settings["dynamic_load_rating"]
-    if C is not None and int(sol.result) == 0 and healthy:
+    if C is not None and succeeded(int(sol.result)) and healthy:
         Lr = float(life.rating_life(bearing, C, sol.Q_inner, sol.Q_outer, contact_angle=alpha))
         if np.isfinite(Lr):
             L = Lr

@@ -51,9 +51,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..case import Case, load_case
+from ..case import Case, as_scenario, load_case
 from ..case.units import to_si
-from ..errors import InputError, NotConvergedError
+from ..errors import failed, InputError, NotConvergedError
 from ..physics.jones import raise_for, solve_batch
 from ..physics.kinematics import Operation
 from ..physics.shaft import raise_for_set, solve_set_batch
@@ -231,29 +231,30 @@ def bearing_stiffness(case_or_set, speeds_rpm, *, throw=True) -> BearingStiffnes
     ``InvalidStateError`` naming the case and the first speed that failed; else check
     ``.solution.result``."""
     case = case_of(case_or_set)
+    sc = as_scenario(case)
     rpm = checked_speeds(speeds_rpm)
     M, n = rpm.size, _padded(rpm.size)
     idx = np.minimum(np.arange(n), M - 1)
-    base = case.operation()
+    base = sc.operation
     op = Operation(jnp.asarray(to_si(rpm[idx], "rpm")), base.control, base.centrifugal, base.gyroscopic)
-    loads = jnp.broadcast_to(case.loads(), (n, 5))
-    if case.is_set:
-        sol = solve_set_batch(case.bearing_set(), op, loads, cage_angle=case.cage_angle,
-                              hertz_method=case.hertz_method)
+    loads = jnp.broadcast_to(sc.loads, (n, 5))
+    if sc.is_set:
+        sol = solve_set_batch(sc.bearing_set, op, loads, cage_angle=sc.cage_angle,
+                              hertz_method=sc.hertz_method)
     else:
-        sol = solve_batch(case.bearing(), op, loads, cage_angle=case.cage_angle, spall=case.spall(),
-                          hertz_method=case.hertz_method, tilt=case.get("operation.tilt") or "free")
+        sol = solve_batch(sc.bearing, op, loads, cage_angle=sc.cage_angle, spall=sc.spall,
+                          hertz_method=sc.hertz_method, tilt=sc.tilt)
     sol = jax.tree_util.tree_map(lambda a: a[:M], sol)
-    bad = np.flatnonzero(np.asarray(sol.result) != 0)
+    bad = np.flatnonzero(failed(np.asarray(sol.result)))
     if throw and bad.size:
         k = int(bad[0])
         one = jax.tree_util.tree_map(lambda a: a[k], sol)
         more = f"; {bad.size} of {M} speeds failed" if bad.size > 1 else ""
-        what = f"{case.source}: the quasi-static solve at {rpm[k]:g} rpm (stiffness for ROSS{more})"
+        what = f"{sc.source}: the quasi-static solve at {rpm[k]:g} rpm (stiffness for ROSS{more})"
         try:
-            if case.is_set:
+            if sc.is_set:
                 raise_for_set(one, what)
-            raise_for(one, what, bearing=case.bearing())
+            raise_for(one, what, bearing=sc.bearing)
         except NotConvergedError as e:          # InvalidStateError too: the same class, the speeds named
             below = rpm[rpm < rpm[k]]
             keep = f"or keep the speeds (speeds_rpm) below {rpm[k]:g} rpm" if below.size else \
@@ -347,7 +348,7 @@ def dropped_terms(stiffness: BearingStiffness) -> DroppedTerms:
 
 # ---------------------------------------------------------------------------- the element
 def _damping_settings(case, damping, mass_kg):
-    dyn = case.dynamics_settings()
+    dyn = as_scenario(case).dynamics
     ratio = dyn["contact_damping_ratio"] if damping is None else damping
     mass = dyn["shaft_mass"] if mass_kg is None else mass_kg
     try:

@@ -20,8 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..case import unit_of
-from ..case.sets import set_layout
+from ..case import as_scenario, unit_of
 from ..errors import InputError
 from ..physics.life import life_hours, rating_life, set_life
 from ..physics.limits import contact_limits
@@ -38,13 +37,15 @@ def _where(case):
 
 
 def solve_set_case(case, *, throw=True):
-    """The set's state at the case's operating point (:class:`bearingsim.physics.shaft.SetSolution`)."""
-    if not case.is_set:
-        raise InputError(f"{case.source}: no [set] section: this is a single-bearing case")
-    sol = solve_set(case.bearing_set(), case.operation(), case.loads(), cage_angle=case.cage_angle,
-                    hertz_method=case.hertz_method, throw=False)
+    """The set's state at the operating point of a case or scenario
+    (:class:`bearingsim.physics.shaft.SetSolution`)."""
+    sc = as_scenario(case)
+    if not sc.is_set:
+        raise InputError(f"{sc.source}: no [set] section: this is a single-bearing case")
+    sol = solve_set(sc.bearing_set, sc.operation, sc.loads, cage_angle=sc.cage_angle,
+                    hertz_method=sc.hertz_method, throw=False)
     if throw:
-        raise_for_set(sol, _where(case))
+        raise_for_set(sol, _where(sc))
     return sol
 
 
@@ -81,14 +82,9 @@ class SetAssessment:
         return {n: v for n, v in out.items() if v}
 
 
-def _ratings(case):
-    """C (N) of every bearing of the set ([bearing] / [set.second_bearing]
-    dynamic_load_rating_kN), None for a bearing without a rating."""
-    s = case.data["set"]
-    facings, _, _, _, _, seconds = set_layout(s, 0.0)
-    C1 = case.data["bearing"].get("dynamic_load_rating_kN")
-    C2 = s.get("second_bearing", {}).get("dynamic_load_rating_kN")
-    return [None if c is None else 1e3 * c for c in (C2 if k in seconds else C1 for k in range(len(facings)))]
+def _ratings(sc):
+    """C (N) of every bearing of the set (:attr:`Scenario.set_ratings`), None for a bearing without a rating."""
+    return list(sc.set_ratings)
 
 
 def assess_set_case(case, sol) -> SetAssessment:
@@ -96,10 +92,11 @@ def assess_set_case(case, sol) -> SetAssessment:
     (:func:`bearingsim.app.assessment.assess_state`: pressure, friction, shoulders, life with its
     own rating), the set's life from the bearings' (ISO/TS 16281, independent failures) and each
     bearing's preload against its static axial capacity."""
-    bset, op = case.bearing_set(), case.operation()
-    base = case.limits_settings()
+    sc = as_scenario(case)
+    bset, op = sc.bearing_set, sc.operation
+    base = sc.limits
     out = []
-    for b, sb, C in zip(bset.bearings, sol.bearings, _ratings(case)):
+    for b, sb, C in zip(bset.bearings, sol.bearings, _ratings(sc)):
         out.append(assess_state(b, op, sb, {**base, "dynamic_load_rating": C}))
     L = [a.rating_life for a in out]
     Ls = hours = None
@@ -123,19 +120,20 @@ class SetStudy:
 def study_set_case(case, *, throw=True) -> SetStudy:
     """The [study] of a set case: one batched solve when only the speed, the loads or the preload
     change (rigid offsets fixed at standstill from each item's preloads); else one solve per value."""
-    st = case.data.get("study")
+    st = case.study_settings()
     if st is None:
         raise InputError(f"{case.source}: no [study] section")
-    cases = case.study_cases()
-    sets = [c.bearing_set() for c in cases]
+    param, values = st
+    cases = [c.build() for c in case.study_cases()]
+    sets = [c.bearing_set for c in cases]
     base = sets[0]
     same = all(jax.tree_util.tree_structure(s) == jax.tree_util.tree_structure(base) for s in sets) and all(
         np.array_equal(np.asarray(getattr(s.bearings[0], f)), np.asarray(getattr(base.bearings[0], f)))
         for s in sets for f in ("ball_diameter", "pitch_diameter", "f_inner", "f_outer", "free_contact_angle"))
     if same:
-        ops = [c.operation() for c in cases]
+        ops = [c.operation for c in cases]
         op = Operation(jnp.stack([o.speed for o in ops]), ops[0].control, ops[0].centrifugal, ops[0].gyroscopic)
-        sol = solve_set_batch(base, op, jnp.stack([c.loads() for c in cases]),
+        sol = solve_set_batch(base, op, jnp.stack([c.loads for c in cases]),
                               cage_angle=case.cage_angle, preload=jnp.stack([s.preload for s in sets]),
                               facings=jnp.stack([s.facings for s in sets]),
                               positions=jnp.stack([s.positions for s in sets]),
@@ -145,21 +143,22 @@ def study_set_case(case, *, throw=True) -> SetStudy:
         sol = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
     if throw:
         raise_for_set(sol, _where(case) + " (study)")
-    return SetStudy(st["parameter"], unit_of(st["parameter"]), np.asarray(st["values"], float), sol)
+    return SetStudy(param, unit_of(param), np.asarray(values, float), sol)
 
 
 def set_lives_hours(case, sol):
     """(per-bearing lives (N,), set life) in hours at the case's speed (ISO/TS 16281, the nominal
     angle of the single bearing's rule: the free contact angle, 0 for a deep groove, as
     :func:`bearingsim.app.assessment.assess_state`), or None when a bearing has no rating."""
-    C = _ratings(case)
+    sc = as_scenario(case)
+    C = _ratings(sc)
     if any(c is None for c in C):
         return None
-    bset = case.bearing_set()
+    bset = sc.bearing_set
     L = jnp.stack([rating_life(b, C[k], s.Q_inner, s.Q_outer,
                                contact_angle=float(b.free_contact_angle) if bool(b.angular_contact) else 0.0)
                    for k, (b, s) in enumerate(zip(bset.bearings, sol.bearings))], axis=-1)
-    w = case.operation().speed
+    w = sc.operation.speed
     return np.asarray(life_hours(L, w)), float(life_hours(set_life(L), w))
 
 
@@ -168,12 +167,13 @@ def study_limits(case, study: SetStudy) -> dict:
     the pressure limit, the largest friction coefficient raceway control needs over the available
     one, the smallest contact-ellipse margin to a groove edge (deg; negative: truncated), the
     lift-off margin (axial load / preload)."""
-    settings = case.limits_settings()
-    bset = case.bearing_set()
+    sc = as_scenario(case)
+    settings = sc.limits
+    bset = sc.bearing_set
     sol = study.solution
     out = {"pressure": [], "friction": [], "edge_deg": []}
     for sb, bb in zip(sol.bearings, bset.bearings):
-        lim = contact_limits(sb, bb, case.operation().control, pressure_limit=settings["pressure_limit"],
+        lim = contact_limits(sb, bb, sc.operation.control, pressure_limit=settings["pressure_limit"],
                              friction_coefficient=settings["friction_coefficient"])
         out["pressure"].append(np.max(np.maximum(np.asarray(lim.pressure_ratio_inner),
                                                  np.asarray(lim.pressure_ratio_outer)), axis=-1))

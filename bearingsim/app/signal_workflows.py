@@ -19,9 +19,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..case import check_sampling, load_case
+from .. import dynamics
+from ..case import as_scenario, check_sampling, load_case
+from ..datasets.runner import make_dataset
 from ..case.units import from_si
-from ..errors import InputError, NotConvergedError
+from ..errors import failed, InputError, NotConvergedError
 from ..output import io
 from ..physics import sweep as sweeps
 from ..physics.kinematics import DefectFrequencies
@@ -36,32 +38,28 @@ __all__ = ["simulate_case", "compare_case", "dataset_case", "spectrum_file", "ca
 
 # ------------------------------------------------------------------------------- dynamics
 def simulate_case(case, *, throw=True, progress=None, **kw):
-    """The dynamic simulation of the case: :func:`bearingsim.dynamics.simulate` with everything
-    the case says (bearing, operating point, loads, defect, cage angle, Hertz method and its
-    ``[dynamics]``: duration, sample rate, seed, structure, realism); any keyword of ``simulate``
-    (``duration``, ``sample_rate``, ``seed``, ``params``, ``realism``, ...) overrides it.  The one
-    place a simulation reads a case (the dynamics know nothing of cases).  Raises CaseError (an
-    InputError) for a sample rate below twice the highest characteristic frequency of the case
+    """The dynamic simulation of a case or its built scenario (``case.build()``, built once here):
+    :func:`bearingsim.dynamics.simulate` with everything it says (bearing, operating point, loads,
+    defect, cage angle, Hertz method and its ``[dynamics]``: duration, sample rate, seed,
+    structure, realism); any keyword of ``simulate`` (``duration``, ``sample_rate``, ``seed``,
+    ``params``, ``realism``, ...) overrides it.  The dynamics know nothing of cases.  Raises
+    CaseError (an InputError) for a sample rate below twice the highest characteristic frequency
     (:func:`bearingsim.case.check_sampling`)."""
-    # local: importing the dynamics (and the data set engine, below) costs ~0.5 s of JAX set-up,
-    # which only simulate, compare and dataset need: info, static, sweep and study start without it
-    from .. import dynamics
-
-    free_tilt_only(case, "the dynamic simulation")
-    check_sampling(case)
-    d = case.dynamics_settings()
-    kw.setdefault("realism", dynamics.Realism.from_settings(d))
-    kw.setdefault("theta0", case.cage_angle)
-    kw.setdefault("seed", d.get("seed", 0))
-    kw.setdefault("hertz_method", case.hertz_method)
-    duration = kw.pop("duration", d["duration"])
-    sample_rate = kw.pop("sample_rate", d["sample_rate"])
-    params = kw.pop("params", dynamics.DynamicsParameters.from_settings(d))
-    res = dynamics.simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration,
+    sc = as_scenario(case)
+    free_tilt_only(sc, "the dynamic simulation")
+    check_sampling(sc)
+    kw.setdefault("realism", sc.realism)
+    kw.setdefault("theta0", sc.cage_angle)
+    kw.setdefault("seed", sc.seed)
+    kw.setdefault("hertz_method", sc.hertz_method)
+    duration = kw.pop("duration", sc.duration)
+    sample_rate = kw.pop("sample_rate", sc.sample_rate)
+    params = kw.pop("params", sc.params)
+    res = dynamics.simulate(sc.bearing, sc.operation, sc.loads, sc.spall, params, duration,
                             sample_rate, progress=progress, throw=False, **kw)
-    if throw and int(res.result) != 0:
+    if throw and failed(int(res.result)):
         code = dynamics.RESULTS(int(res.result))
-        raise dynamics.DynamicsError(f"{case.source}: the dynamic simulation failed: {code.message} after "
+        raise dynamics.DynamicsError(f"{sc.source}: the dynamic simulation failed: {code.message} after "
                                      f"{res.num_steps} steps", code.hint, code)
     return res
 
@@ -85,19 +83,20 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
     """Quasi-static sweep at the cage angles of the dynamic run (subsampled to ``max_angles``),
     an inner spall or a ball pit turned to where it is at each of those instants, with peak
     values side by side.  Needs a ``[dynamics]`` section in the case file."""
-    if "dynamics" not in case.raw:
-        raise InputError(f"{case.source}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
-    res = simulate_case(case)
+    sc = as_scenario(case)
+    if not sc.has_dynamics:
+        raise InputError(f"{sc.source}: compare needs a [dynamics] section (duration_s, sample_rate_Hz)")
+    res = simulate_case(sc)
     th = np.asarray(res.cage_angle)
     idx = np.unique(np.linspace(0, len(th) - 1, min(len(th), max_angles)).astype(int))
-    spall = case.spall()
+    spall = sc.spall
     centers = None          # a turning defect: its centre at each compared instant too
     if spall is not None and spall.location in ("inner", "ball"):
         rate = 1.0 if spall.location == "inner" else float(res.spin_ratio)
         centers = float(spall.center) + rate * np.asarray(res.shaft_angle)[idx]
-    qs = sweeps.sweep(case.bearing(), case.operation(), case.loads(), spall, angles=th[idx], centers=centers,
-                      hertz_method=case.hertz_method)
-    check_solution(qs, case, "the quasi-static sweep at the dynamic run's cage angles", throw)
+    qs = sweeps.sweep(sc.bearing, sc.operation, sc.loads, spall, angles=th[idx], centers=centers,
+                      hertz_method=sc.hertz_method)
+    check_solution(qs, sc, "the quasi-static sweep at the dynamic run's cage angles", throw)
 
     def ratio(d, s, tol):        # amplification only where the static value is not ~0
         return d / s if abs(s) > tol else np.nan
@@ -125,13 +124,12 @@ def dataset_case(case, path, *, throw=True, progress=False, runner=None, device=
     (same file); None runs them in this process.  ``device`` ("cpu", "gpu", None: JAX's
     default), ``chunk`` (items per chunk; 0: fill the device) and ``compression`` (of /signals)
     as in ``make_dataset``."""
-    from ..datasets.runner import make_dataset  # local: the data set engine loads the dynamics (above)
-
-    free_tilt_only(case, "the data set")
-    summary = make_dataset(case, path, progress=progress, runner=runner, device=device, chunk=chunk,
+    sc = as_scenario(case)
+    free_tilt_only(sc, "the data set")
+    summary = make_dataset(sc, path, progress=progress, runner=runner, device=device, chunk=chunk,
                            compression=compression)
     if throw and summary.failed:
-        raise NotConvergedError(f"{case.source}: {summary.failed} of {summary.count} items of the data "
+        raise NotConvergedError(f"{sc.source}: {summary.failed} of {summary.count} items of the data "
                                 f"set failed (written to {path} with labels/result != 0)")
     return summary
 
@@ -176,8 +174,8 @@ def envelope_band(sample_rate, resonance_hz):
 
 
 def simulation_spectrum(res, case):
-    """Squared-envelope spectrum of a simulation's sensor signal, in the case's resonance band."""
-    d = case.dynamics_settings()
+    """Squared-envelope spectrum of a simulation's sensor signal, in the resonance band of a case or scenario."""
+    d = as_scenario(case).dynamics
     return envelope_spectrum(np.asarray(res.sensor_acceleration), d["sample_rate"],
                              band=envelope_band(d["sample_rate"], d["resonance_frequency"]))
 
@@ -209,9 +207,9 @@ def spectrum_file(path, *, resonance_hz=3000.0) -> EnvelopeAnalysis:
     fs = 1.0 / float(t[1] - t[0])
     location = None
     if sim["case"] is not None:
-        resonance_hz = sim["case"].dynamics_settings()["resonance_frequency"]
-        sp = sim["case"].spall()
-        location = None if sp is None else sp.location
+        sc = sim["case"].build()
+        resonance_hz = sc.dynamics["resonance_frequency"]
+        location = None if sc.spall is None else sc.spall.location
     band = envelope_band(fs, resonance_hz)
     es = envelope_spectrum(a, fs, band=band)
     name, f0, markers = fault_lines(fr, location)

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import unit_of
-from ..errors import InputError
+from ..case import as_scenario, unit_of
+from ..errors import failed, InputError, succeeded
 from ..output import io
 from ..output.report import info_text as bearing_info, static_text, study_text
 from ..physics import jones
@@ -67,9 +67,10 @@ def check_solution(sol, case, what, throw):
     ``throw="all"``: only when every item failed (a sweep with no valid state at all has the
     verdict of a single solve, e.g. a reverse axial load)."""
     if throw == "all":
-        throw = bool(np.all(np.asarray(sol.result) != 0))
+        throw = bool(np.all(failed(np.asarray(sol.result))))
     if throw:
-        jones.raise_for(sol, f"{case.source}: {what}", bearing=case.bearing())
+        sc = as_scenario(case)
+        jones.raise_for(sol, f"{sc.source}: {what}", bearing=sc.bearing)
     return sol
 
 
@@ -81,25 +82,21 @@ def solve_case(case, *, throw=True):
     (:func:`bearingsim.physics.jones.solve`: a loaded contact centred at or beyond a shoulder edge is
     result 8, or 7 at an angular contact bearing's low edge, healthy or with a defect; a set's
     bearings are checked by the same rule); nothing is decided here."""
-    if case.is_set:
-        return sets.solve_set_case(case, throw=throw)
-    b, op, spall = case.bearing(), case.operation(), case.spall()
-    sol = jones.solve(b, op, case.loads(), cage_angle=case.cage_angle,
-                      spall=spall, hertz_method=case.hertz_method, throw=False, tilt=_tilt(case))
-    return check_solution(sol, case, "the quasi-static solve", throw)
-
-
-def _tilt(case):
-    """The case's ``operation.tilt`` ("free" or "held"; "free" where the case does not say)."""
-    return case.get("operation.tilt") or "free"
+    sc = as_scenario(case)
+    if sc.is_set:
+        return sets.solve_set_case(sc, throw=throw)
+    sol = jones.solve(sc.bearing, sc.operation, sc.loads, cage_angle=sc.cage_angle,
+                      spall=sc.spall, hertz_method=sc.hertz_method, throw=False, tilt=sc.tilt)
+    return check_solution(sol, sc, "the quasi-static solve", throw)
 
 
 def free_tilt_only(case, command):
     """Refuse a held tilt (``operation.tilt = "held"``) where ``command`` solves a free ring only:
     ``bearingsim static`` (:func:`solve_case`) and the Python API solve it, the sweeps, studies,
     simulations and data sets do not (never a free ring's answer to a held case)."""
-    if _tilt(case) == "held":
-        raise InputError(f'{case.source}: operation.tilt = "held" is not supported by {command}: it solves a '
+    sc = as_scenario(case)
+    if sc.tilt == "held":
+        raise InputError(f'{sc.source}: operation.tilt = "held" is not supported by {command}: it solves a '
                          'free (force-controlled) ring; allowed here: "free"',
                          'solve the held ring with `bearingsim static` (solve_case), or set operation.tilt = '
                          '"free" for this command')
@@ -110,8 +107,8 @@ def assess_case(case, sol) -> Assessment:
     ellipse against the shoulders) and, when the case gives ``bearing.dynamic_load_rating_kN``,
     the ISO/TS 16281 rating life of the state ``sol`` of ``case`` (single state;
     :func:`bearingsim.app.assessment.assess_state`, the rule each bearing of a set is assessed by)."""
-    return assess_state(case.bearing(), case.operation(), sol, case.limits_settings(),
-                        healthy=case.spall() is None)
+    sc = as_scenario(case)
+    return assess_state(sc.bearing, sc.operation, sol, sc.limits, healthy=sc.spall is None)
 
 
 def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):
@@ -119,17 +116,17 @@ def sweep_case(case, *, throw=True, progress=False, resolve_edges=True):
     rectangular-spall edge inserted unless ``resolve_edges=False``).  ``throw``: True raises for
     any failed angle, ``"all"`` (``bearingsim sweep``) only when every angle failed, False never
     (codes per angle)."""
-    free_tilt_only(case, "the cage-angle sweep")
-    b, spall = case.bearing(), case.spall()
-    st = case.sweep_settings()
+    sc = as_scenario(case)
+    free_tilt_only(sc, "the cage-angle sweep")
+    b, spall, st = sc.bearing, sc.spall, sc.sweep
     angles = sweeps.sweep_angles(b, spall, st["start"], st["stop"], st["steps"], resolve_edges)
     bar = _progress(len(angles), "sweep", "angle", progress)
     try:
-        sol = sweeps.sweep_chunked(b, case.operation(), case.loads(), spall, angles, progress=bar.update,
-                                   hertz_method=case.hertz_method)
+        sol = sweeps.sweep_chunked(b, sc.operation, sc.loads, spall, angles, progress=bar.update,
+                                   hertz_method=sc.hertz_method)
     finally:
         bar.close()
-    return check_solution(sol, case, "the cage-angle sweep", throw)
+    return check_solution(sol, sc, "the cage-angle sweep", throw)
 
 
 # ------------------------------------------------------------------------------------ study
@@ -149,7 +146,7 @@ class Study:
 
     @property
     def converged(self):
-        return np.asarray(self.solution.result) == 0
+        return succeeded(np.asarray(self.solution.result))
 
     def message(self):
         return self.solution.message()
@@ -244,7 +241,7 @@ def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
     try:
         if batched:
             sol = _study_batch(cases, grids, bar)
-            for m in np.flatnonzero(np.any(np.asarray(sol.result) != 0, axis=1)):
+            for m in np.flatnonzero(np.any(failed(np.asarray(sol.result)), axis=1)):
                 sol = _replace_row(sol, int(m), _study_sweep(cases[m], grids[m]))
         elif runner is not None:
             rows = [None] * len(cases)

@@ -27,6 +27,7 @@ module              holds
 ``validation``      checks driven by the schema, cross-checks, :class:`CaseError`
 ``files``           shipped cases by name, reading UTF-8 text, TOML errors told by key
 ``sampling``        the sample-rate rule of simulated signals (:func:`check_sampling`)
+``scenario``        :class:`Scenario`: a case built once into its SI objects (``case.build()``)
 ``toml_writer``     :func:`to_toml`
 ``reference``       :func:`schema_reference_markdown` (the reference page)
 ``messages``        how values and names are shown in messages ("did you mean")
@@ -53,6 +54,7 @@ from .files import case_path, parse_toml, read_case_text, shipped_cases, shipped
 from .messages import fmt_value, suggest
 from .reference import schema_reference_markdown
 from .sampling import check_sampling, highest_frequency, nominal_frequencies
+from .scenario import Scenario, as_scenario, build
 from .schema import OPTIONAL, REQUIRED, SCHEMA, Key, Section, all_keys, lookup, si_name, split_key, unit_of
 from .sets import set_layout
 from .toml_writer import to_toml
@@ -62,6 +64,8 @@ from .validation import CaseError, section_raw, set_raw, validate
 __all__ = [
     "CaseError",
     "Case",
+    "Scenario",
+    "as_scenario",
     "Key",
     "Section",
     "SCHEMA",
@@ -287,6 +291,12 @@ class Case:
     def dynamics_settings(self) -> dict:
         """The [dynamics] keys in SI without unit suffix: dict(duration=s, sample_rate=Hz, ...)."""
         return self.si("dynamics")
+
+    def build(self) -> Scenario:
+        """This case built once into its SI objects: a frozen :class:`Scenario` (bearing or set,
+        operating point, loads, defect, dynamics parameters, realism, background, data set spec),
+        the object the workflows, the data set engine, the rig records and identify take."""
+        return build(self)
 
 
 def _case_from_raw(raw: dict, text: str, source: str) -> Case:

@@ -3,9 +3,9 @@ frequency of the case (shaft, FTF, BPFO, BPFI, BSF, 2 BSF) cannot show the defec
 refused, naming the keys and the minimum rate."""
 from __future__ import annotations
 
-from ..physics.kinematics import DefectFrequencies, defect_frequencies
+from ..physics.kinematics import DefectFrequencies
 from .messages import fmt_num
-from .units import from_si, to_si
+from .scenario import as_scenario
 from .validation import CaseError
 
 __all__ = ["nominal_frequencies", "highest_frequency", "check_sampling"]
@@ -14,11 +14,10 @@ _NAMES = {"shaft": "shaft", "ftf": "FTF", "bpfo": "BPFO", "bpfi": "BPFI", "bsf":
 
 
 def nominal_frequencies(case, speed_rpm=None) -> DefectFrequencies:
-    """Shaft and defect frequencies (Hz, floats) of the case at ``speed_rpm`` (default: the
-    case's ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows."""
-    n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
-    shaft = from_si(to_si(n, "rpm"), "rev_s")
-    return DefectFrequencies(*(float(v) for v in defect_frequencies(case.bearing(), shaft)))
+    """Shaft and defect frequencies (Hz, floats) of a case or scenario at ``speed_rpm`` (default:
+    its ``operation.speed_rpm``) and the free contact angle, the ones ``bearingsim info`` shows
+    (:meth:`Scenario.frequencies`)."""
+    return as_scenario(case).frequencies(speed_rpm)
 
 
 def highest_frequency(f: DefectFrequencies) -> tuple[str, float]:
@@ -27,13 +26,15 @@ def highest_frequency(f: DefectFrequencies) -> tuple[str, float]:
 
 
 def check_sampling(case, speed_rpm=None, speed_key="operation.speed_rpm"):
-    """Raise CaseError when ``dynamics.sample_rate_Hz`` is below twice the highest characteristic
-    frequency at ``speed_rpm`` (default the case's speed; ``speed_key`` names where it comes from)."""
-    n = case.get("operation.speed_rpm") if speed_rpm is None else float(speed_rpm)
-    name, f = highest_frequency(nominal_frequencies(case, n))
-    fs = case.get("dynamics.sample_rate_Hz")
+    """Raise CaseError when ``dynamics.sample_rate_Hz`` of a case or scenario is below twice the
+    highest characteristic frequency at ``speed_rpm`` (default its speed; ``speed_key`` names
+    where it comes from)."""
+    sc = as_scenario(case)
+    n = sc.speed_rpm if speed_rpm is None else float(speed_rpm)
+    name, f = highest_frequency(sc.frequencies(n))
+    fs = sc.sample_rate
     if fs < 2.0 * f:
-        raise CaseError(case.source, [
+        raise CaseError(sc.source, [
             f"dynamics.sample_rate_Hz = {fmt_num(fs)} is below twice the highest characteristic frequency "
             f"of the case ({name} {f:.1f} Hz at {speed_key} {fmt_num(n)} rpm, free contact angle): "
             f"need sample_rate_Hz >= {2.0 * f:.1f} Hz"])

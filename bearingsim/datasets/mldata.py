@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import failed, InputError
 
 __all__ = ["SPLITS", "load_dataset", "WindowDataset"]
 
@@ -83,12 +83,12 @@ def load_dataset(path, split: str | None = None, *, include_failed: bool = False
                              "write one with `bearingsim dataset SPEC -o FILE.h5`")
         lab_all = f["labels"][()]
         keep = np.ones(len(lab_all), bool)
-        failed = lab_all["result"] != 0 if "result" in (lab_all.dtype.names or ()) else np.zeros_like(keep)
+        bad = failed(lab_all["result"]) if "result" in (lab_all.dtype.names or ()) else np.zeros_like(keep)
         if code is not None:
             keep &= lab_all["split"] == code
-        dropped = int(np.sum(keep & failed)) if not include_failed else 0
+        dropped = int(np.sum(keep & bad)) if not include_failed else 0
         if not include_failed:
-            keep &= ~failed
+            keep &= ~bad
         rows = np.flatnonzero(keep)
         sig = f["signals"]
         signals = np.asarray(sig[rows] if rows.size else np.zeros((0, sig.shape[1])), dtype=np.float32)

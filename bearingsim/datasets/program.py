@@ -59,11 +59,9 @@ class Physics:
     profile: str
 
     @classmethod
-    def of_case(cls, case):
-        d = case.dynamics_settings()
-        return cls(case.bearing(), dynamics.DynamicsParameters.from_settings(d), dynamics.Realism.from_settings(d),
-                   case.data["operation"]["raceway_control"], case.hertz_method, float(case.cage_angle),
-                   case.data.get("defect", {}).get("profile", "rectangular"))
+    def of_scenario(cls, sc):
+        """The physics of a :class:`~bearingsim.case.Scenario` (``case.build()``)."""
+        return cls(sc.bearing, sc.params, sc.realism, sc.control, sc.hertz_method, float(sc.cage_angle), sc.profile)
 
 
 #: the micro-batch width W of the device programs per JAX platform: every program call is W items

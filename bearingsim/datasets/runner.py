@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import check_sampling
-from ..errors import BearingsimError, InputError, SettingWarning
+from ..case import Scenario, as_scenario, check_sampling
+from ..errors import BearingsimError, failed, InputError, SettingWarning
 from ..signals.background import Background
 from ..signals.signal_stage import SignalSettings
 from .program import CHUNK_FIELDS, Physics, micro_batch, program_threads, run_settings, simulate_chunk
@@ -192,23 +192,19 @@ class ChunkPlan:
         return self.order[k * self.chunk:(k + 1) * self.chunk]
 
 
-def signal_settings(case, ds, fs, T, physics):
-    """The :class:`bearingsim.signals.signal_stage.SignalSettings` of the case's [dataset] (static)."""
+def signal_settings(sc, ds, fs, T, physics):
+    """The :class:`bearingsim.signals.signal_stage.SignalSettings` of scenario ``sc``'s [dataset] (static);
+    ``background = "machine"`` uses its [background] (:attr:`Scenario.background`)."""
     machine = None
     if ds.get("background", "none") == "machine":
-        sec = case.si("background") if "background" in case.data else {}
-        machine = Background(tuple(sec.get("shaft_amplitudes") or ()), float(sec.get("line_frequency", 60.0)),
-                             tuple(sec.get("line_amplitudes") or ()), float(sec.get("noise_rms", 0.0)),
-                             tuple(sec.get("psd_frequencies") or ()), tuple(sec.get("psd_levels") or ()),
-                             tuple(sec.get("modulation_depths") or ()), float(sec.get("knock_rate", 0.0)),
-                             float(sec.get("knock_amplitude", 0.0)), float(sec.get("knock_frequency", 3000.0)),
-                             float(sec.get("knock_damping_ratio", 0.05)))
+        machine = sc.background if sc.background is not None else Background()
     return SignalSettings.from_dataset(ds, fs, T, physics.realism, physics.params.modes(), machine)
 
 
 def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=None,
                  compression=None, max_speed_rpm=None) -> DatasetSummary:
-    """Simulate the [dataset] of ``case`` and write it to ``path`` (HDF5), resumably.
+    """Simulate the [dataset] of ``case`` (a :class:`~bearingsim.case.Case` or its built
+    :class:`~bearingsim.case.Scenario`, built once here) and write it to ``path`` (HDF5), resumably.
 
     Finished chunks go to :func:`partial_path` at once; a rerun after an interruption continues
     from them; the file is assembled when all are there.  Ctrl-C / SIGTERM raise
@@ -226,32 +222,31 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     False nothing; a callable receives every :class:`~bearingsim.datasets.progress.ProgressEvent`."""
     show = Display("dataset") if progress is True else progress if callable(progress) else None
     try:
-        return _make_dataset(case, path, RunProgress(show if show is not None else lambda e: None), runner,
+        return _make_dataset(as_scenario(case), path, RunProgress(show if show is not None else lambda e: None), runner,
                              device=device, chunk=chunk, compression=compression, max_speed_rpm=max_speed_rpm)
     finally:
         if isinstance(show, Display):
             show.close()
 
 
-def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_speed_rpm) -> DatasetSummary:
-    """:func:`make_dataset` reporting to ``track`` (a :class:`RunProgress`, in phase "preparing")."""
+def _make_dataset(sc: Scenario, path, track, runner, *, device, chunk, compression, max_speed_rpm) -> DatasetSummary:
+    """:func:`make_dataset` of scenario ``sc`` reporting to ``track`` (a :class:`RunProgress`, in phase "preparing")."""
     import jax
 
     compression_options(compression)                    # a bad name fails before any work
     imap = serial_imap if runner is None else runner.imap
-    ds = settings(case)
-    check_sampling(case, ds["speed_rpm"][1], "dataset.speed_rpm max")
-    o = case.data["operation"]
+    ds = settings(sc)
+    check_sampling(sc, ds["speed_rpm"][1], "dataset.speed_rpm max")
     # the chunk program uses the default centrifugal/gyroscopic flags of Operation
-    if not (o["centrifugal"] and o["gyroscopic"]):
-        raise InputError(f"{case.source}: [dataset] needs operation.centrifugal and "
+    if not (sc.centrifugal and sc.gyroscopic):
+        raise InputError(f"{sc.source}: [dataset] needs operation.centrifugal and "
                          "operation.gyroscopic true (the batch simulation always includes them)")
     dev = resolve_device(device)
-    ph = Physics.of_case(case)
-    fs = float(case.dynamics_settings()["sample_rate"])
+    ph = Physics.of_scenario(sc)
+    fs = sc.sample_rate
     duration = float(ds["duration_s"])
     T = int(round(duration * fs))
-    lab = draw_labels(case)
+    lab = draw_labels(sc)
     n = lab.size
     chunk = ds.get("chunk", 16) if chunk is None else chunk
     chunk = default_chunk(dev, T, n) if chunk in (0, "auto") else min(int(chunk), n)
@@ -264,7 +259,7 @@ def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_
     slots = slots_of(lab)
     loc, extent, depth, center = defect_geometry(ph.bearing, lab)
     folder = partial_path(path)
-    spec = spec_record(case, ds, n, T, fs, chunk)
+    spec = spec_record(sc, ds, n, T, fs, chunk)
     t0 = time.perf_counter()
     done = 0
     where = jax.default_device(dev) if runner is None else contextlib.nullcontext()
@@ -275,13 +270,13 @@ def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_
             lab["slip_percent"] = ph.realism.slip_percent
             lab["speed_fluctuation_percent"] = ph.realism.speed_fluctuation_percent
             lab["noise_rms_m_s2"] = ph.realism.noise_rms
-            modes = transfer_paths(case, lab)
+            modes = transfer_paths(sc, lab)
             chunks = -(-n // chunk)
             sub = open_partial(folder, spec, lambda: run_settings(ph, lab, extent, depth, center, fs))
             todo = [k for k in range(chunks) if not chunk_path(folder, k).exists()]
             done = n - sum(min(chunk, n - k * chunk) for k in todo)
             plan = ChunkPlan(ph, lab, simulation_order(lab["fault_class"]), chunk, loc, center, extent, depth,
-                             duration, fs, sub, slots, modes, signal_settings(case, ds, fs, T, ph), pit, unbridged,
+                             duration, fs, sub, slots, modes, signal_settings(sc, ds, fs, T, ph), pit, unbridged,
                              width, dev.platform, max(float(ds["speed_rpm"][1]), float(max_speed_rpm or 0.0)))
             threads = program_threads(dev) if runner is None else 1
             wave = todo[:threads if runner is None else getattr(runner, "workers", None) or 1]
@@ -294,7 +289,7 @@ def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_
                 del out
             track.report("writing")
             it = max(int(np.max(read_chunk(folder, k, "ball_iterations"), initial=1)) for k in range(chunks))
-            assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, "newmark", chunks, modes,
+            assemble(sc, ds, path, folder, lab, T, fs, duration, it, sub, "newmark", chunks, modes,
                      CHUNK_FIELDS, compression)
             shutil.rmtree(folder, ignore_errors=True)
             track.report("done")
@@ -306,7 +301,7 @@ def _make_dataset(case, path, track, runner, *, device, chunk, compression, max_
             raise Interrupted(f"{how}: stopped before the first chunk finished; nothing written") from None
         raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
                           "the same command again to continue") from None
-    failed = lab["result"] != 0
-    codes, counts = np.unique(lab["result"][failed], return_counts=True)
-    return DatasetSummary(Path(path), n, T, int(failed.sum()), time.perf_counter() - t0,
+    bad = failed(lab["result"])
+    codes, counts = np.unique(lab["result"][bad], return_counts=True)
+    return DatasetSummary(Path(path), n, T, int(bad.sum()), time.perf_counter() - t0,
                           {int(c): int(k) for c, k in zip(codes, counts)}, str(dev), chunk)

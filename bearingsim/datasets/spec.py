@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import dynamics
+from ..case.scenario import as_scenario
 from ..case.units import to_si
 from ..physics.defect import LOCATIONS
 from ..errors import InputError, ResultCode
@@ -133,14 +134,16 @@ class DatasetSummary:
 
 
 def settings(case) -> dict:
-    """The case's [dataset] section (engineering units), or one clear :class:`InputError`."""
-    ds = case.data.get("dataset")
+    """The [dataset] spec (engineering units) of a case or scenario
+    (:class:`~bearingsim.case.Scenario`), or one clear :class:`InputError`."""
+    sc = as_scenario(case)
+    ds = sc.dataset
     if ds is None:
-        raise InputError(f"{case.source}: no [dataset] section: add one with at least count = N "
+        raise InputError(f"{sc.source}: no [dataset] section: add one with at least count = N "
                          "(see the case reference)")
     missing = [k for k in RANGES if k not in ds]
     if missing:  # the case reader reports these; guard for hand-built cases
-        raise InputError(f"{case.source}: [dataset] lacks " + ", ".join(f"dataset.{k}" for k in missing))
+        raise InputError(f"{sc.source}: [dataset] lacks " + ", ".join(f"dataset.{k}" for k in missing))
     return ds
 
 
@@ -214,7 +217,7 @@ def _draw_one(key, cls, r):
     return out
 
 
-def _tables(case, ds):
+def _tables(sc, ds):
     """The spec's ranges as float64 arrays (the arguments of the vmapped draw)."""
     rng = lambda key, d=(1.0, 1.0): np.asarray(ds.get(key) or d, float)  # noqa: E731
     r = {f: rng(f) for f in RANGES[:3]}
@@ -225,7 +228,7 @@ def _tables(case, ds):
     r["signal_gain"] = rng("signal_gain")
     r["snr_dB"], r["has_snr"] = rng("fault_snr_dB", (0.0, 0.0)), ds.get("fault_snr_dB") is not None
     r["strike"] = rng("ball_strike_probability")
-    params = dynamics.DynamicsParameters.from_settings(case.dynamics_settings())
+    params = sc.params
     r["modes"] = np.stack([np.asarray(v, float).reshape(-1) for v in params.modes()], -1)   # (M, 3)
     keys = ("resonance_frequency_Hz", "resonance_damping_ratio", "resonance_gain")
     r["mode_ranges"] = np.array([rng(k) for k in keys])
@@ -233,13 +236,13 @@ def _tables(case, ds):
     return r
 
 
-def _draw(case, ds, start, n):
+def _draw(sc, ds, start, n):
     import jax
     import jax.numpy as jnp
     total = int(ds["count"])
     cls = class_of_index(ds, total)[start:start + n]
     keys = item_keys(ds["seed"], n, start)
-    r = {k: (jnp.asarray(v) if isinstance(v, np.ndarray) else v) for k, v in _tables(case, ds).items()}
+    r = {k: (jnp.asarray(v) if isinstance(v, np.ndarray) else v) for k, v in _tables(sc, ds).items()}
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
     with _cpu():
         out = _draw_batch(jnp.asarray(keys), jnp.asarray(cls), r, flags)
@@ -254,7 +257,8 @@ def _draw_batch(keys, cls, r, flags):
 
 
 def draw_labels(case) -> np.ndarray:
-    """The (N,) label table of the case's [dataset] (frequencies 0 and result 0 until simulated).
+    """The (N,) label table of the [dataset] of a case or scenario (frequencies 0 and result 0
+    until simulated).
 
     Items come in class blocks (healthy, outer, inner, ball: ``fault_class`` 0-3, :data:`CLASSES`,
     round(fraction x N) items each, outer the rest).  Every item draws from its own key
@@ -265,9 +269,10 @@ def draw_labels(case) -> np.ndarray:
     pit on ball 0); the signal gain log-uniform; the target SNR (fault classes) and the strike
     probability (ball class) uniform; the split exact per class; ``realism_seed`` (uint32, its own
     sub-key) seeds the item's realism draws."""
-    ds = settings(case)
+    sc = as_scenario(case)
+    ds = settings(sc)
     n = int(ds["count"])
-    keys, cls, d = _draw(case, ds, 0, n)
+    keys, cls, d = _draw(sc, ds, 0, n)
     lab = np.zeros(n, LABEL_DTYPE)
     lab["index"] = np.arange(n)
     lab["fault_class"] = cls
@@ -303,9 +308,10 @@ def transfer_paths(case, lab) -> np.ndarray:
     """(N, M, 3) sensor modes of every item (frequency Hz, damping ratio, gain): the [dynamics]
     modes, or, per ``[dataset] resonance_*`` range given, drawn per item and mode from the item's
     key (frequency and gain log-uniform, damping uniform; frequencies sorted)."""
-    ds = settings(case)
+    sc = as_scenario(case)
+    ds = settings(sc)
     idx = np.asarray(lab["index"])
-    _, _, d = _draw(case, ds, 0, int(ds["count"]))
+    _, _, d = _draw(sc, ds, 0, int(ds["count"]))
     return np.ascontiguousarray(d["transfer_path"][idx])
 
 

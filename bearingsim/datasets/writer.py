@@ -104,8 +104,9 @@ def finished_chunks(folder: Path) -> list:
     return sorted(p.name for p in Path(folder).glob("chunk_*") if p.is_dir())
 
 
-def spec_record(case, ds, n, T, fs, chunk):
-    return {"bearingsim_version": __version__, "chunk_format": CHUNK_FORMAT, "case_toml": case.text,
+def spec_record(sc, ds, n, T, fs, chunk):
+    """What decides a partial folder's chunks (a rerun continues only the same spec): scenario ``sc``'s TOML, seed, sizes."""
+    return {"bearingsim_version": __version__, "chunk_format": CHUNK_FORMAT, "case_toml": sc.text,
             "seed": int(ds["seed"]), "count": n, "samples": T, "sample_rate_Hz": fs, "chunk": chunk}
 
 
@@ -128,7 +129,7 @@ def open_partial(folder: Path, spec: dict, settings):
     return sub
 
 
-def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chunks, modes, fields,
+def assemble(sc, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chunks, modes, fields,
              compression=None):
     """Write the HDF5 file from the finished chunks, in item order (atomically); ``fields``: the
     label fields the chunks carry."""
@@ -136,7 +137,7 @@ def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chun
 
     opts = compression_options(compression)
     n = lab.size
-    Z = case.bearing().n_balls
+    Z = sc.bearing.n_balls
     for k in range(chunks):
         idx = read_chunk(folder, k, "index")
         for name in fields:
@@ -146,7 +147,7 @@ def assemble(case, ds, path, folder, lab, T, fs, duration, it, sub, scheme, chun
     with io.atomic_path(path) as tmp:
         with h5py.File(tmp, "w", track_order=True) as f:
             f.attrs["bearingsim_version"] = __version__
-            f.attrs["case_toml"] = case.text
+            f.attrs["case_toml"] = sc.text
             f.attrs["seed"] = int(ds["seed"])
             f.attrs["count"] = n
             f.attrs["balls"] = Z

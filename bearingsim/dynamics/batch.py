@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..physics.defect import LOCATIONS, Spall
-from ..errors import InputError
+from ..errors import failed, InputError
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import solve
 from .ball_force import ITER_CHOICES, choose_ball_iterations
@@ -59,7 +59,7 @@ def batch_settings(bearing, op, loads, spall, theta0, sample_rate, params=None, 
     params = DynamicsParameters() if params is None else params
     curve = stiffness_curve(bearing, hertz_method)
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=spall, hertz_method=hertz_method, throw=False)
-    if int(sol.result) != 0:
+    if failed(int(sol.result)):
         return None, None
     _, a_m = characteristic_frequencies(bearing, op, sol)
     k = spin_ratio(bearing, a_m)

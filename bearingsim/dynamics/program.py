@@ -47,6 +47,7 @@ from .model import build_model, initial_state
 from .motion import (MOTION_STREAM, defect_times, draw_motion, knot_count, motion_at, motion_labels, motion_ok,
                      pass_count)
 from .parameters import RESULTS, Realism
+from ..errors import failed, succeeded
 
 __all__ = ["MENU", "MOTION_STREAM", "item_keys", "ChunkProgram", "chunk_program", "iterations_needed", "menu_iterations"]
 
@@ -91,7 +92,7 @@ _states_jit = jit(_states)
 
 
 def _merge(sols, retry):
-    take = (sols.result != 0) & (retry.result == 0)
+    take = failed(sols.result) & succeeded(retry.result)
     return jax.tree_util.tree_map(lambda a, b: jnp.where(take.reshape(take.shape + (1,) * (a.ndim - 1)), b, a),
                                   sols, retry)
 
@@ -114,10 +115,10 @@ def _prepare(bearing, curve, op, defects, sols, theta0, loc, center, extent, dep
         return ball_errors(bearing, o, q, sp, curve, ang, jnp.array([0.95, 1.0, 1.05]), phi, kk)
 
     err = jax.vmap(errs)(op, sols.displacement, defects, theta0, center, extent, k, code)
-    needed = iterations_needed(err, sols.result == 0)
+    needed = iterations_needed(err, succeeded(sols.result))
     return dict(op=op, defects=defects, sols=sols, freqs=freqs, contact_angle=a_m, spin_ratio=k,
                 ball_errors=err, needed=needed, chunk_needed=jnp.max(jnp.where(needed == 0, MENU[-1], needed)),
-                failed=jnp.any(sols.result != 0))
+                failed=jnp.any(failed(sols.result)))
 
 
 _prepare_jit = jit(_prepare)
@@ -149,7 +150,7 @@ def _states_prepare(bearing, curve, speed_rpm, loads, theta0, loc, center, exten
         op, defects, sols = _states(bearing, curve, speed_rpm, loads, th, loc, center, extent, d, profile, slots,
                                     control, hertz_method, 1)
         dp, u = jax.vmap(lambda s_, L, ww, mm: pit_of_solution(s_, bearing, 0, L, ww, mm))(sols, loc, w, machined)
-        ok = sols.result == 0
+        ok = succeeded(sols.result)
         dp = jnp.where(fault & ok, dp, 0.0)
         nxt = jnp.where(fault, depth, 0.0) if keep_depth else dp
         return (nxt, theta0), (op, defects, sols, dp, jnp.where(fault & ok, u, 0.0), ok | ~fault)
@@ -211,7 +212,7 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         jumps = edge_fractions(edges, 0, T, substeps, h)
         carry = (y0, dy0, jnp.zeros(fm.shape + (2,)))
         _, (ah, sens) = advance_record(model, carry, stages, jumps, h, flt, scheme, lean=True)
-        code = jnp.where((sol.result != 0) | ~pit_ok, RESULTS.initial_state.value,
+        code = jnp.where(failed(sol.result) | ~pit_ok, RESULTS.initial_state.value,
                          jnp.where(~ok, RESULTS.initial_equilibrium.value, 0))
         fits = motion_ok(m, Z, T / fs) & e_ok & p_ok
         code = jnp.where((code == 0) & ~fits, RESULTS.fixed_size.value, code)

@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..physics.defect import Spall, as_defects
-from ..errors import InputError
+from ..errors import failed, InputError, succeeded
 from ..physics.hertz import stiffness_curve
 from ..physics.jones import result_hint, solve
 from ..physics.kinematics import DefectFrequencies, Operation
@@ -71,7 +71,7 @@ def unbridged_of(bearing, op, loads, defects, hertz_method="exact"):
     centre = float(sp.center) if sp.location == "outer" else load_zone_centre(loads)
     healthy = Spall(sp.center, sp.extent, 0.0, sp.profile, sp.location, sp.ball)
     sol = solve(bearing, op, loads, cage_angle=centre, spall=healthy, hertz_method=hertz_method, throw=False)
-    if int(sol.result) != 0:
+    if failed(int(sol.result)):
         return 0.0, False
     host = jax.tree_util.tree_map(np.asarray, sol)
     j = int(np.argmin(np.abs(np.angle(np.exp(1j * (host.azimuth - centre))))))
@@ -246,7 +246,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     pre = precompile_ball_check(bearing, op, defects, curve, theta0) if ball_iterations == "auto" else None
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=defects or None, hertz_method=hertz_method,
                 throw=False)
-    code = RESULTS.successful if int(sol.result) == 0 else RESULTS.initial_state
+    code = RESULTS.successful if succeeded(int(sol.result)) else RESULTS.initial_state
     u = 0.0
     if realism.pass_variation and defects:
         u, u_ok = unbridged_of(bearing, op, loads, defects, hertz_method)

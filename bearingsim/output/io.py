@@ -17,7 +17,7 @@ import numpy as np
 from .._version import __version__
 from ..case import CaseError, parse_case
 from ..case.units import from_si, to_si
-from ..errors import BearingsimError, InputError, OutputError
+from ..errors import BearingsimError, InputError, OutputError, succeeded
 from ..physics.kinematics import DefectFrequencies
 
 
@@ -154,7 +154,7 @@ def static_to_dict(sol, bearing=None, assessment=None) -> dict:
         "units": UNITS_NOTE,
         "tilt": getattr(sol, "tilt", "free"),
         "tilt_note": tilt_note(sol),
-        "converged": bool(int(sol.result) == 0),
+        "converged": bool(succeeded(int(sol.result))),
         "result": int(sol.result),
         "message": sol.message()[0],
         "iterations": int(sol.iterations),
@@ -255,7 +255,7 @@ def state_datasets(sol):
 
     States that did not converge are flagged in ``converged`` and their values set to 0 (never
     NaN in a results file)."""
-    ok = np.asarray(sol.result) == 0
+    ok = succeeded(np.asarray(sol.result))
     out = {"converged": (ok, "bool (True where the solve converged)")}
     for name, (field, units) in _STATE_FIELDS.items():
         a = np.asarray(getattr(sol, field))

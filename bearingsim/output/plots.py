@@ -8,6 +8,7 @@ from ..case.units import from_si
 from ..physics.defect import depth_profile
 from ..signals.lines import defect_markers, fault_lines
 from .plots_signal import plot_envelope_spectrum, plot_time_history
+from ..errors import failed, succeeded
 
 C_IN, C_OUT = "#1f77b4", "#d62728"
 
@@ -129,7 +130,7 @@ def spall_traces(sweep_sol, center=0.0):
     for name, _, _ in _QUANTITIES:
         v = np.asarray(getattr(sweep_sol, name))
         out[name] = np.stack([v[n, (near + k) % Z] for k in (-1, 0, 1)], axis=1)[order]
-    ok = (np.asarray(sweep_sol.result) == 0)[order]
+    ok = succeeded(np.asarray(sweep_sol.result))[order]
     return u[order], out, ok
 
 
@@ -174,7 +175,7 @@ def plot_sweep(sweep_sol, title="", spall=None, path=None):
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, ncol=5, loc="best")
-    bad = np.asarray(sweep_sol.result) != 0
+    bad = failed(np.asarray(sweep_sol.result))
     for t in th[bad]:
         ax.axvline(t, color="red", alpha=0.4)
     psi = np.asarray(sweep_sol.azimuth)

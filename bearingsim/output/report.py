@@ -11,6 +11,7 @@ from ..case.units import from_si, label
 from ..physics.hertz import hertz_contact
 from ..physics.kinematics import ball_kinematics, defect_frequencies
 from .io import RING_DOFS
+from ..errors import failed
 
 __all__ = ["table", "quantity", "info_text", "static_text", "tilt_text", "stiffness_text", "limits_summary", "limits_text", "study_text", "compare_text", "spectrum_text"]
 
@@ -224,7 +225,7 @@ def study_text(case, study) -> str:
 
 def compare_text(case, comparison) -> str:
     """Peaks of the quasi-static sweep and of the dynamic run, with the amplification."""
-    bad = int(np.sum(np.asarray(comparison.quasi_static.result) != 0))
+    bad = int(np.sum(failed(np.asarray(comparison.quasi_static.result))))
     head = (f"{case.title}: quasi-static sweep at {len(comparison.indices)} cage angles of the dynamic run "
             f"({float(comparison.dynamic.time[-1]):.4f} s){'; %d angles did not converge' % bad if bad else ''}")
     return head + "\n" + table(("quantity", "unit", "quasi-static", "dynamic", "dynamic / static"), comparison.rows,

@@ -20,6 +20,7 @@ from ..case.units import from_si, label as unit_label
 from ..physics.shaft import PRELOAD_CLASSES, preload_class_force, static_axial_capacity
 from .io import RING_DOFS, UNITS_NOTE, atomic_path, case_attrs, static_to_dict, stiffness_to_dict, write_h5
 from .report import limits_summary, quantity, stiffness_text
+from ..errors import succeeded
 
 __all__ = ["set_text", "set_info_text", "set_study_text", "set_to_dict", "write_set_study", "write_set_study_csv",
            "STUDY_FIELDS", "SET_FIELDS", "parameter_label", "preload_class_text"]
@@ -148,7 +149,7 @@ def set_to_dict(case, sol, assessment) -> dict:
     ``spring_shift_um``, ``static_axial_capacity_N``, ``preload_over_capacity``, ``azimuth_shaft_deg``)."""
     a = assessment
     q = np.asarray(sol.displacement)
-    out = dict(units=UNITS_NOTE, title=case.title, converged=bool(int(sol.result) == 0), result=int(sol.result),
+    out = dict(units=UNITS_NOTE, title=case.title, converged=bool(succeeded(int(sol.result))), result=int(sol.result),
                message=sol.message()[0], iterations=int(sol.iterations), residual_norm=float(sol.residual_norm),
                residual_norm_units="N (moments divided by R_i)",
                shaft_displacement={f"{n}_{u}": from_si(float(v), u) for (n, u), v in zip(RING_DOFS, q)},

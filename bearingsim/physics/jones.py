@@ -56,7 +56,7 @@ from .balls import (KN, UM, BallState, ball_equations, ball_state, balls_at, gro
                     inverse2, lift_onto_outer, offset_jacobian, orbital_speed, reaction_matrix,
                     reactions_from_balls, static_ball_position)
 from .defect import Spall, canonical_defects, contact_depths
-from ..errors import InputError, InputTypeError, InvalidStateError, NotConvergedError, ResultCode
+from ..errors import failed, InputError, InputTypeError, InvalidStateError, NotConvergedError, ResultCode, succeeded
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed,
@@ -430,7 +430,7 @@ class JonesSolution(eqx.Module):
     @property
     def converged(self):
         """True where the state converged and passed every validity check."""
-        return self.result == 0
+        return succeeded(self.result)
 
     @property
     def cage_speed(self):
@@ -782,7 +782,7 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     kw = dict(cage_angle=cage_angle, spall=canonical_defects(spall), maxit=maxit, rtol=rtol, atol=atol,
               hertz_method=hertz_method, tilt=tilt)
     sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
-    if int(sol.result) != 0 and (speed_steps < 8 or q0 is not None):
+    if failed(int(sol.result)) and (speed_steps < 8 or q0 is not None):
         retry = _solve_jit(bearing, op, loads, speed_steps=8, **kw)
         if bool(better(retry.result, sol.result)):
             sol = retry

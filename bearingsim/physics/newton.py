@@ -24,6 +24,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
+from ..errors import failed
 
 __all__ = ["LS_STEPS", "FREE_STEPS", "RING_CAP", "BALL_CAP", "NEWTON_FAILURES", "traced_tolerances",
            "max_abs", "cap_step", "accept_step", "step_status", "better", "converged_only", "retry_failed",
@@ -114,7 +115,7 @@ def retry_failed(sol, run, take=better, bad=None):
     ``take(retry_result, first_result)`` says, per failed item, whether its retry replaces it.
     ``bad``: the items to retry (a boolean mask; default: ``result != 0``).  Host orchestration
     (reads the codes): call it outside ``jit``."""
-    mask = np.asarray(sol.result) != 0 if bad is None else np.asarray(bad)
+    mask = failed(np.asarray(sol.result)) if bad is None else np.asarray(bad)
     bad = np.flatnonzero(mask)
     if not bad.size:
         return sol

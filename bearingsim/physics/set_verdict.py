@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import BearingsimError
+from ..errors import BearingsimError, failed
 from .jones import PRESSURE_WARNING, RESULTS, OverloadWarning, raise_for
 from .preload import static_axial_capacity
 
@@ -103,7 +103,7 @@ def warn_set_overload(bset, sol):
     """Warn (:class:`~bearingsim.physics.jones.OverloadWarning`, as a single bearing's solve does) when a
     converged set has a contact above :data:`~bearingsim.physics.jones.PRESSURE_WARNING`, naming the
     bearing, and its preload where that alone exceeds its static axial capacity C_0a."""
-    if int(sol.result) != 0:
+    if failed(int(sol.result)):
         return
     p = np.asarray(sol.max_pressure)
     for k in np.flatnonzero(p > PRESSURE_WARNING):

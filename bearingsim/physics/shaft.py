@@ -55,7 +55,7 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
                     lift_onto_outer, offset_jacobian, orbital_speed, reaction_matrix,
                     reactions_from_balls, static_ball_position)
 from .defect import as_defects, contact_depths
-from ..errors import InputError
+from ..errors import failed, InputError, succeeded
 from .hertz import contact_ellipse, stiffness_curve
 from .jones import PRESSURE_WARNING, RESULTS, JonesSolution, initial_displacement, state_validity
 from .kinematics import Operation
@@ -521,7 +521,7 @@ class SetSolution(eqx.Module):
 
     @property
     def converged(self):
-        return self.result == 0
+        return succeeded(self.result)
 
     @property
     def n(self):
@@ -806,9 +806,9 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
     kw = dict(cage_angle=jnp.asarray(cage_angle, jnp.float64), spalls=spalls, maxit=maxit,
               rtol=rtol, atol=atol, hertz_method=hertz_method, offsets=offsets)
     sol = _solve_jit(bset, op, loads, speed_steps=speed_steps, **kw)
-    if int(sol.result) != 0 and speed_steps < 8:
+    if failed(int(sol.result)) and speed_steps < 8:
         retry = _solve_jit(bset, op, loads, speed_steps=8, **kw)
-        if int(retry.result) == 0:
+        if succeeded(int(retry.result)):
             sol = retry
     if throw:
         raise_for_set(sol)

@@ -31,6 +31,7 @@ from .jones import JonesSolution, raise_for, solve, solve_state
 from ..names import noun_module
 from .newton import retry_failed, traced_tolerances
 from ..programs import jit
+from ..errors import failed, succeeded
 
 __all__ = ["EDGE_EPS", "spall_edge_angles", "sweep_angles", "defect_occupancy", "representatives",
            "sweep", "sweep_chunked", "defect_centre_edges", "defect_angles", "sweep_defect_angle"]
@@ -196,13 +197,13 @@ def _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, h
     reps, run = representatives(defect_occupancy(bearing, spall, angles, centers, which))
     rep_sols = [solve(bearing, op, loads, cage_angle=angles[int(r)], spall=at(int(r)), **kw)
                 for r in reps]
-    ok_rep = np.array([int(r.result) == 0 for r in rep_sols])
+    ok_rep = np.array([succeeded(int(r.result)) for r in rep_sols])
     start = jax.tree_util.tree_map(lambda *a: jnp.stack(a)[jnp.asarray(run)], *[
         (r.displacement, r.ball_position, r.undropped_position) for r in rep_sols])
     sol = _sweep_warm_jit(bearing, op, loads, spall, angles, *start, *tol, hertz_method, **extra)
     # the failed angles (and those whose run's cold solve failed) again from cold starts; a redo
     # replaces a failed angle, or a converged one only when it converged too
-    bad = (np.asarray(sol.result) != 0) | ~ok_rep[run]
+    bad = failed(np.asarray(sol.result)) | ~ok_rep[run]
 
     def redo(idx):
         ex = extra if centers is None else dict(centers=centers[idx], which=which)

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import scipy.signal as ss
 
-from ..case import load_case
+from ..case import as_scenario, load_case
 from ..errors import InputError
 from .fault_size import angle_from_order, pass_features
 from .identify_bank import BANK_FS, BANK_WINDOW_S, fault_kinematics, measured_shaft_speed
@@ -129,7 +129,7 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     if location_hint is not None and location_hint not in CLASSES:
         raise InputError(f"location_hint {location_hint!r}: must be one of {', '.join(CLASSES)} (or None)",
                          hint="give the class the record is known to have, or None to identify it")
-    case = load_case(case) if isinstance(case, (str, Path)) else case
+    sc = as_scenario(load_case(case) if isinstance(case, (str, Path)) else case)
     a = np.asarray(x)
     short = a.ndim == 1 and fs is not None and a.size < MIN_SECONDS * float(fs)
     x = check_record(np.tile(a, int(math.ceil(MIN_SECONDS * float(fs) / max(a.size, 1)))) if short else a, fs,
@@ -142,8 +142,8 @@ def identify(x, fs, case, *, rpm=None, identifier=None, location_hint=None,
     if fs < BANK_FS - 1e-6:
         raise InputError(f"{what}: sample rate {fs:g} Hz is too low: identify needs at least {BANK_FS:g} Hz "
                          "(the bank of simulated records it learned from is sampled at 12 kHz)")
-    b = case.bearing()
-    nominal = float(rpm) if rpm is not None else float(case.data["operation"]["speed_rpm"])
+    b = sc.bearing
+    nominal = float(rpm) if rpm is not None else sc.speed_rpm
     if not (math.isfinite(nominal) and nominal > 0):
         raise InputError(f"--rpm {nominal!r}: give the nominal shaft speed in rpm (> 0)")
     ident = identifier if identifier is not None else default_identifier()

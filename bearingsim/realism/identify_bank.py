@@ -23,6 +23,7 @@ from .fault_size import PASS_FEATURE_NAMES, line_frequency, pass_features, surfa
 from ..names import CLASSES
 from ..physics.kinematics import DefectFrequencies
 from ..signals.features import fault_orders, octave_bands, window_features
+from ..errors import succeeded
 
 __all__ = ["BANK_FS", "BANK_WINDOW_S", "BANK_SEED", "BANK_COUNT", "BUILD_SECONDS_PER_ITEM", "bank_spec",
            "cache_dir", "bank_name", "build_bank", "FileLock", "measured_shaft_speed", "fault_kinematics",
@@ -145,7 +146,7 @@ def bank_features(path, bearing=None) -> dict:
         X = h["signals"][:].astype(float)
         lab = h["labels"][:]
         fs = float(h.attrs.get("sample_rate_Hz", BANK_FS))
-    ok = lab["result"] == 0
+    ok = succeeded(lab["result"])
     X, lab = X[ok], lab[ok]
     cls = np.asarray(lab["fault_class"], int)
     nominal = float(bank_spec(10).data["operation"]["speed_rpm"]) / 60.0
@@ -219,7 +220,7 @@ def bank_twins(bank, r, k=8):
     with h5py.File(getattr(bank, "bank", bank), "r") as h:
         lab = h["labels"][:]
         c = CLASSES.index(r.fault_class)
-        idx = np.flatnonzero((lab["fault_class"] == c) & (lab["result"] == 0))
+        idx = np.flatnonzero((lab["fault_class"] == c) & succeeded(lab["result"]))
         if c and r.length_interval_mm:
             L = r.length_mm or float(np.sqrt(np.prod(r.length_interval_mm)))
             d = np.abs(np.log(lab["spall_length_mm"][idx] / L)) + np.abs(lab["speed_rpm"][idx] / r.rpm - 1.0) * 10

@@ -82,7 +82,7 @@ from ..case import case_from_dict, check_sampling, load_case, to_toml
 from ..datasets.runner import make_dataset
 from ..names import CLASSES
 from ..physics.defect import LOCATIONS
-from ..errors import InputError
+from ..errors import InputError, succeeded
 from ..output.io import atomic_path
 from ..output.report import calibration_text
 from .records import UNITS, check_record, read_record
@@ -149,7 +149,7 @@ def _fit_gain(raw, fault_class, rpm, excess, fs, items=GAIN_ITEMS, seed=0, tmpdi
         make_dataset(case, path, progress=False)
         with h5py.File(path, "r") as f:
             X = np.asarray(f["signals"], float)
-            ok = np.asarray(f["labels"])["result"] == 0
+            ok = succeeded(np.asarray(f["labels"])["result"])
     if not ok.any():
         raise InputError(f"the simulated {fault_class} items for the signal-gain fit all failed")
     X = X[ok] - X[ok].mean(axis=1, keepdims=True)

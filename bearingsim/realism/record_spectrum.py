@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..case import as_scenario
+from ..errors import failed, InputError
 from ..output.io import read_simulation
 from ..physics.kinematics import DefectFrequencies
 from ..signals.envelope import amplitude_spectrum, envelope_spectrum, select_band
@@ -164,7 +165,7 @@ def read_overlay(path, item=0) -> tuple[np.ndarray, float, float | None, str]:
                 lab = f["labels"][int(item)]
                 fs = float(f.attrs["sample_rate_Hz"])
                 shaft = float(lab["shaft_Hz"]) if "shaft_Hz" in lab.dtype.names else None
-                if "result" in lab.dtype.names and int(lab["result"]) != 0:
+                if "result" in lab.dtype.names and failed(int(lab["result"])):
                     raise InputError(f"--overlay {p}: item {item} failed to simulate (result "
                                      f"{int(lab['result'])}): pick another with --item")
                 return x, fs, shaft, f"{p.name} item {item}"
@@ -184,6 +185,7 @@ def record_spectrum(path, case, *, rpm=None, channel=None, sample_rate=None, uni
     """Spectra of the record file ``path`` with the fault lines of ``case`` (a Case; its bearing
     and, without ``rpm`` or a file rpm, its speed as the search centre); ``overlay``: a
     simulation file (see :func:`read_overlay`)."""
+    sc = as_scenario(case)
     p = Path(path)
     if p.suffix.lower() not in RECORD_SUFFIXES:
         raise InputError(f"{p}: not a record file: give a .npz, .npy, .csv, .txt or .wav record "
@@ -196,11 +198,11 @@ def record_spectrum(path, case, *, rpm=None, channel=None, sample_rate=None, uni
             raise InputError(f"--rpm {rpm:g}: a shaft speed > 0 rpm")
         fr, how = float(rpm) / 60.0, "given (--rpm)"
     else:
-        centre = nominal if nominal else float(case.data["operation"]["speed_rpm"])
+        centre = nominal if nominal else sc.speed_rpm
         fr = shaft_speed(a, fs, centre / 60.0)
         how = f"found near {centre:g} rpm ({'the file' if nominal else 'the case'})"
-    freqs = bearing_frequencies(case.bearing(), fr)
-    lines = fault_line_table(case.bearing(), fr)
+    freqs = bearing_frequencies(sc.bearing, fr)
+    lines = fault_line_table(sc.bearing, fr)
     top = max(lines.values())
     if 2.0 * top >= fs:
         raise InputError(f"{p}: sample rate {fs:g} Hz ({rate_source}) is below twice the highest fault line "

@@ -46,6 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.signal as ss
 
+from ..case import as_scenario
 from ..dynamics import DynamicsParameters, Realism, simulate
 from ..errors import InputError
 from ..physics.pit import (  # noqa: F401  (re-exported: the record pipeline's vocabulary)
@@ -132,7 +133,7 @@ def sensor_record(result, params, cv=0.0, seed=0, fs_out=None, jitter=0.0):
 
 def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv_max=None,
                     pass_jitter_max=None, overrides=None, fs_out=None, progress=False):
-    """Simulate a case and return (record in m/s^2, sample rate, DynamicsResult, labels).
+    """Simulate a case (or its built scenario) and return (record in m/s^2, sample rate, DynamicsResult, labels).
 
     The [dynamics] settings of ``case`` (engine keys: modes, slip, speed fluctuation, noise and
     the pass-to-pass variability), updated by ``overrides`` (SI names as in
@@ -142,7 +143,8 @@ def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv
     sensor acceleration, decimated to ``fs_out`` when given; ``labels`` are the run's realism
     labels (``result.realism``).  ``duration``/``sample_rate``/``seed`` default to the case's.
     """
-    d = dict(case.dynamics_settings())
+    sc = as_scenario(case)
+    d = dict(sc.dynamics)
     d.update(overrides or {})
     if pass_cv_max is not None:
         d["pass_amplitude_cv_max_percent"] = 100.0 * float(pass_cv_max)
@@ -153,8 +155,8 @@ def simulate_record(case, *, duration=None, sample_rate=None, seed=None, pass_cv
     seed = int(d.get("seed", 0)) if seed is None else int(seed)
     params = DynamicsParameters.from_settings(d)
     realism = Realism.from_settings(d)
-    r = simulate(case.bearing(), case.operation(), case.loads(), case.spall(), params, duration, sample_rate,
-                 theta0=case.cage_angle, realism=realism, seed=seed, hertz_method=case.hertz_method,
+    r = simulate(sc.bearing, sc.operation, sc.loads, sc.spall, params, duration, sample_rate,
+                 theta0=sc.cage_angle, realism=realism, seed=seed, hertz_method=sc.hertz_method,
                  record_balls=False, progress=progress)
     y, fs = np.asarray(r.sensor_acceleration), float(sample_rate)
     if fs_out is not None and float(fs_out) != fs:

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import make_dataset
-from ..errors import InputError
+from ..errors import InputError, succeeded
 from ..names import CLASSES
 from ..signals.nuisance import INGREDIENTS
 from ..physics.kinematics import DefectFrequencies
@@ -268,7 +268,7 @@ def simulated_windows(path, orders: DefectFrequencies, window_s=None, features="
         X = np.asarray(f["signals"], float)
         lab = np.asarray(f["labels"])
         fs = float(f.attrs["sample_rate_Hz"])
-    ok = lab["result"] == 0
+    ok = succeeded(lab["result"])
     X, lab = X[ok], lab[ok]
     T = X.shape[1] if window_s is None else int(round(window_s * fs))
     n = X.shape[1] // T
