@@ -50,7 +50,7 @@ HEAVY_FIRST = {
     "tests/test_workflows.py": 112, "notebooks/02_spall_and_sweep.ipynb": 103,
     "tests/test_sweep.py": 101, "tests/test_verdicts.py": 75, "tests/test_transfer.py": 120, "tests/test_rotordynamics.py": 90,
     "tests/test_distributed.py": 67, "tests/test_cli.py": 65, "tests/test_packaging.py": 61,
-    "notebooks/07_sim_to_real.ipynb": 55, "tests/test_jones.py": 55, "tests/test_chord.py": 52,
+    "notebooks/07_sim_to_real.ipynb": 95, "tests/test_jones.py": 55, "tests/test_chord.py": 52,
     "tests/test_dataset.py": 46, "notebooks/01_quasi_static.ipynb": 44,
     "tests/test_set_limits.py": 40, "tests/validation/test_set_reference.py": 40,
     "notebooks/09_identify.ipynb": 36, "tests/test_dataset_engine.py": 36,
