@@ -27,6 +27,8 @@ STREAMS = {
     "noise": 14, "passes": 15, "strike": 16, "background": 17, "randomisation": 18, "transfer": 19,
     # issue 26's ingredients (bearingsim.signals.nuisance)
     "nuisance": 20,
+    # issue 33: a ball pit's kinematic exposure pass by pass (bearingsim.dynamics.exposure)
+    "ball_exposure": 21,
 }
 assert len(set(STREAMS.values())) == len(STREAMS), "stream numbers must be distinct"
 

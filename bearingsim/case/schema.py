@@ -544,6 +544,20 @@ SCHEMA: dict[str, Section] = {
             "ball_strike_probability": _range("probability that a ball pit strikes the raceways on a "
                                               "pass (its spin axis wanders), drawn uniform per item; "
                                               "1: every pass", "", [1.0, 1.0], ge=0, le=1),
+            "ball_exposure": _enum("how a ball pit meets the raceways (issue 33; docs/physics.md §8.3): gate "
+                                   "(the drawn strikes of ball_strike_probability and the ball fault model's "
+                                   "drawn gate, issue 26) or kinematic (the pit's overlap with the rolling "
+                                   "track pass by pass, from the spin axis of raceway control, its wander and "
+                                   "the Hertz contact width: bearingsim.dynamics.exposure; replaces the strikes "
+                                   "and the gate)", ("gate", "kinematic"), "gate"),
+            "ball_pit_latitude_deg": _range("ball_exposure = \"kinematic\": the pit's latitude above the "
+                                            "ball's spin equator, drawn uniform per item", "deg", [-10.0, 10.0],
+                                            ge=-90, le=90),
+            "ball_axis_wander_deg": _range("ball_exposure = \"kinematic\": s.d. of the spin axis's pitch and "
+                                           "yaw wander, drawn uniform per item", "deg", [1.0, 6.0], ge=0, le=45),
+            "ball_axis_correlation_cage_rev": _range("ball_exposure = \"kinematic\": correlation of the axis "
+                                                     "wander in cage revolutions (Ornstein-Uhlenbeck), drawn "
+                                                     "uniform per item", "", [0.5, 2.0], gt=0),
             "outer_center_positions_deg": Key("numbers", "outer-race pits at these load-zone positions "
                                               "only (0: load-zone centre, the CWRU 6:00; 90 / -90: 3:00 / "
                                               "9:00; 180: 12:00), each item one of them at random; absent: "

@@ -214,11 +214,12 @@ def device_program(plan, pad, threads=None):
         g_in = jax.device_put(cut({k: v for k, v in sig.items() if v is not None}), dev)
         out = prog(s_in["keys"], s_in["speed_rpm"], s_in["loads"], s_in["theta0"], s_in["location"],
                    s_in["center"], s_in["extent"], s_in["depth"], s_in["modes"], params, pit=s_in.get("pit"),
-                   keep_depth=not plan.pit)
+                   keep_depth=not plan.pit, track=plan.signal.ball_exposure == "kinematic")
         unb = out["unbridged"]
         freqs = jax.numpy.stack([out[k] for k in ("ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz")], -1)
         x, lb = finish_items(s_in["keys"], out["housing_acceleration"], out["sensor"], out["pass_times"], unb,
-                             g_in["fault_class"], out["shaft_Hz"], g_in["draws"], plan.signal, freqs)
+                             g_in["fault_class"], out["shaft_Hz"], g_in["draws"], plan.signal, freqs,
+                             out.get("ball_track"))
         keep = {k: out[k] for k in ("result", "ftf_Hz", "bpfo_Hz", "bpfi_Hz", "bsf_Hz", "pass_jitter_percent",
                                     "pit_depth", "unbridged", "pit_ok")}
         host = jax.device_get((x, lb, keep))

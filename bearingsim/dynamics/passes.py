@@ -28,6 +28,7 @@ class PassSettings(NamedTuple):
     pass_lead: float = 0.15         # a pass's piece starts this fraction of an interval before it
     pass_taper: float = 0.1         # raised-cosine taper between pieces (fraction of an interval)
     strikes: bool = False           # whether a pass may miss (a strike probability below 1)
+    exposure: bool = False          # a ball pit's per-pass exposure replaces the strikes (issue 33)
 
 
 def _mean_interval(tp):
@@ -112,7 +113,8 @@ def vary_passes(x, fs, pass_times, factors, shifts, lead=0.15, taper=0.1):
 
 
 @jit
-def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_probability, s: PassSettings):
+def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_probability, s: PassSettings,
+                     exposure=None):
     """One record's pass-to-pass variability (the first step of a data set item's signal stage,
     :func:`bearingsim.signals.signal_stage.finish_item`; a single simulation,
     :func:`bearingsim.dynamics.simulate`, applies the same): the housing acceleration
@@ -123,7 +125,10 @@ def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_
     a record whose pit is bridged and always strikes keeps ``sensor``.  ``pass_times`` (P,) s,
     sorted, +inf padded.  Returns (sensor record, factors (P + 1,), shifts (P + 1,) s, c.v.,
     delay fraction).  One compiled program per settings and shapes (pass arrays, not Python
-    floats, for ``unbridged`` and ``strike_probability``)."""
+    floats, for ``unbridged`` and ``strike_probability``).  With ``s.exposure``, ``exposure`` (P,)
+    (0..1 per pass, :func:`bearingsim.dynamics.exposure.pass_exposure`: the ball pit's kinematic
+    exposure; 1 for other defects) multiplies the passes instead of the drawn strikes, and a record
+    with an exposure below 1 is varied and filtered again."""
     fs = s.fs
     P = pass_times.shape[0]
     cv = s.pass_cv_max * unbridged
@@ -132,14 +137,19 @@ def pass_variability(key, housing, sensor, pass_times, unbridged, modes, strike_
     kp = jax.random.split(stream_key(key, "passes"))
     fac = pass_factors(kp[0], P + 1, cv)
     shifts = pass_shifts(kp[1], pass_times, jitter)
-    fac = fac.at[1:].multiply(strike_factors(stream_key(key, "strike"), P, p))
-    active = (cv > 0) | (jitter > 0) | (p < 1.0)
+    if s.exposure:
+        fac = fac.at[1:].multiply(exposure)
+        miss = jnp.any(exposure < 1.0)
+    else:
+        fac = fac.at[1:].multiply(strike_factors(stream_key(key, "strike"), P, p))
+        miss = p < 1.0
+    active = (cv > 0) | (jitter > 0) | miss
     varied = jnp.where(active, vary_passes(housing, fs, pass_times, fac, shifts, s.pass_lead, s.pass_taper),
                        housing)
-    if s.pass_cv_max > 0 or s.pass_delay_max > 0 or s.strikes:
+    if s.pass_cv_max > 0 or s.pass_delay_max > 0 or s.strikes or s.exposure:
         f, z, g = modes[:, 0], modes[:, 1], modes[:, 2]
         y = run_filter(sensor_filter(f, z, g, 1.0 / fs), varied)
-        a = jnp.where((unbridged > 0.0) | (p < 1.0), y, sensor)
+        a = jnp.where((unbridged > 0.0) | miss, y, sensor)
     else:
         a = sensor
     return a, fac, shifts, cv, jitter

@@ -41,6 +41,7 @@ from ..physics.kinematics import Operation
 from ..physics.pit import pit_of_solution
 from ..programs import jit
 from .ball_force import ITER_CHOICES, ITER_TOL, ball_errors
+from .exposure import ball_track
 from .integrate import advance_record, check_scheme, edge_fractions, motion_stages
 from .frequencies import state_frequencies
 from .model import build_model, initial_state
@@ -241,6 +242,16 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
 _run_jit = jit(_run)
 
 
+def _ball_tracks(bearing, sols, defects):
+    """(N, 7) every item's :func:`bearingsim.dynamics.exposure.ball_track` (issue 33): a program of
+    its own, run only when asked, so that the other programs stay as they were."""
+    pit_extent = next((sp.extent for sp in defects if sp.location == "ball"), jnp.zeros(sols.beta.shape[0]))
+    return jax.vmap(lambda s_, e: ball_track(bearing, s_, e))(sols, pit_extent)
+
+
+_ball_tracks_jit = jit(_ball_tracks)
+
+
 class ChunkProgram:
     """The compiled programs of one data set configuration (:func:`chunk_program`)."""
 
@@ -292,7 +303,7 @@ class ChunkProgram:
                         self.profile)
 
     def __call__(self, keys, speed_rpm, loads, theta0, location, center, extent, depth, modes, params,
-                 iterations=None, pit=None, keep_depth=False):
+                 iterations=None, pit=None, keep_depth=False, track=False):
         """Simulate one chunk: ``keys`` (N, 2) uint32 (``jax.random`` keys, one per item),
         ``speed_rpm`` (N,), ``loads`` (N, 5) N / N m, ``theta0`` (N,) cage angle at t = 0 (rad),
         ``location`` (N,) int (index in :data:`bearingsim.physics.defect.LOCATIONS`), ``center``,
@@ -306,7 +317,9 @@ class ChunkProgram:
         items: zero signals), ``pass_times`` (N, P) s ascending, +inf padded,
         ``pass_jitter_percent``, ``speed_fluctuation_frequencies_Hz`` (N, K), ``cage_speed``,
         ``shaft_Hz``, ``ftf_Hz``, ``bpfo_Hz``, ``bpfi_Hz``, ``bsf_Hz``, ``contact_angle``,
-        ``spin_ratio``, ``ball_error`` (N,), ``pit_depth`` (m; the depth simulated),
+        ``spin_ratio``, ``ball_error`` (N,), with ``track`` ``ball_track`` (N, 7:
+        :func:`bearingsim.dynamics.exposure.ball_track`, the kinematic exposure's geometry, one more
+        program), ``pit_depth`` (m; the depth simulated),
         ``unbridged`` and ``pit_ok`` (N,) and ``ball_iterations`` (the host int used).
         ``pit``: None, or (pit diameter, machined depth) (N,) m each for ``depth_rule = "pit"``:
         every fault item's depth is then its pit's effective depth at its own healthy contact,
@@ -319,6 +332,9 @@ class ChunkProgram:
             iterations = menu_iterations([int(jax.device_get(prep["chunk_needed"]))])
         out = self.run(prep, keys, loads, theta0, modes, params, iterations)
         out["ball_iterations"] = int(iterations)
+        if track:
+            self._add(1)
+            out["ball_track"] = _ball_tracks_jit(self.bearing, prep["sols"], prep["defects"])
         return out
 
 

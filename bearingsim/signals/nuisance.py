@@ -24,7 +24,10 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
     noise amplitude goes as ``u + (1 - u) q^gamma`` (``gamma`` = ``ball_load_exponent``, ``u``
     = ``ball_unloaded``).  Output: ``g(t) [(1 - c) x_n + c r(t)]`` at the RMS of the input,
     ``x_n`` the engine's signal, ``r`` the load-modulated contact noise, ``c`` =
-    ``ball_noise_share``.  (4) The ball's load also varies as the inner ring's runout and
+    ``ball_noise_share``.  With ``[dataset] ball_exposure = "kinematic"`` (issue 33) the gate is
+    not drawn: it is the pit's exposure from the ball kinematics
+    (:mod:`bearingsim.dynamics.exposure`), on the contact noise only (the engine's impacts carry
+    it pass by pass), and the bursts sit on the pit's own passes.  (4) The ball's load also varies as the inner ring's runout and
     waviness turn under it, at n (f_r - FTF), n = 1..8: the level is multiplied by ``max(0, 1 +
     sum_n w_n cos(2 pi n (f_r - FTF) t + phi_n))``, ``w_n = w rho^(n - 1)``, ``w`` drawn from
     ``ball_ring_waviness``, ``rho`` from ``ball_ring_decay``.  With the load zone's cage
@@ -170,9 +173,16 @@ def _gate(key, T, fs, fc, fraction):
     return jax.nn.sigmoid((s - thr) / 0.15)
 
 
-def ball_fault_modulation(key, fault, fs, shaft_hz, ftf_hz, bsf_hz, settings=None):
+def ball_fault_modulation(key, fault, fs, shaft_hz, ftf_hz, bsf_hz, settings=None, exposure=None):
     """The ball-pit signal ``fault`` (T,) of the engine as a real damaged ball shows it (module
-    docstring); same RMS as ``fault``.  Returns (signal, labels)."""
+    docstring); same RMS as ``fault``.  Returns (signal, labels).
+
+    ``exposure``: None (the drawn gate ``g(t)``, issue 26), or ``(e, d)`` (T,) each: the pit's
+    kinematic exposure in time and the time to its nearest pass (issue 33:
+    :func:`bearingsim.dynamics.exposure.exposure_at`, :func:`~bearingsim.dynamics.exposure.pass_distance`).
+    Then the gate is ``e`` and acts on the contact noise only (the engine's impacts in ``fault``
+    carry the exposure pass by pass already), and the edge bursts sit on the pit's own passes
+    instead of a drawn phase; the other draws are the same."""
     s = settings_of(settings)
     T = fault.shape[-1]
     ks = jax.random.split(key, 12)
@@ -188,10 +198,14 @@ def ball_fault_modulation(key, fault, fs, shaft_hz, ftf_hz, bsf_hz, settings=Non
     f0 = _logu(ks[8], s["ball_noise_Hz"])
     zeta = _u(ks[9], s["ball_noise_damping"])
     psi0, phi0 = jax.random.uniform(ks[10], (2,), jnp.float64, 0.0, 1.0)
-    g = _gate(ks[11], T, fs, wander, in_path)
-    # rolling over the edge: a Gaussian window of 2 sigma = edge around each 2 BSF crossing
-    ph = jnp.mod(2.0 * bsf_hz * t + phi0, 1.0)
-    d = jnp.minimum(ph, 1.0 - ph) / (2.0 * bsf_hz)
+    if exposure is None:
+        g = _gate(ks[11], T, fs, wander, in_path)
+        # rolling over the edge: a Gaussian window of 2 sigma = edge around each 2 BSF crossing
+        ph = jnp.mod(2.0 * bsf_hz * t + phi0, 1.0)
+        d = jnp.minimum(ph, 1.0 - ph) / (2.0 * bsf_hz)
+    else:
+        e, d = exposure
+        in_path = jnp.mean(e)
     burst = jnp.exp(-0.5 * (d / (0.5 * edge)) ** 2)
     q = load_zone_factor(2.0 * jnp.pi * (ftf_hz * t + psi0), eps)
     level = unloaded + (1.0 - unloaded) * q ** gamma
@@ -205,7 +219,11 @@ def ball_fault_modulation(key, fault, fs, shaft_hz, ftf_hz, bsf_hz, settings=Non
     r = level * (rough + (1.0 - rough) * burst) * noise
     x = fault - jnp.mean(fault)
     xr = _rms(x)
-    out = g * ((1.0 - share) * x / xr + share * r / _rms(r))
+    if exposure is None:
+        out = g * ((1.0 - share) * x / xr + share * r / _rms(r))
+    else:
+        r = e * r
+        out = (1.0 - share) * x / xr + share * r / _rms(r)
     out = out * xr / _rms(out)
     return out, {"ball_in_path": in_path, "ball_edge_ms": edge * 1e3, "ball_noise_share": share,
                  "ball_load_exponent": gamma}

@@ -7,7 +7,9 @@ What it does to one item (the order of :func:`finish_items`):
 1. pass-to-pass variability of the defect's impacts (:func:`vary_passes`, the JAX twin of
    ``vary_passes`` of the NumPy oracle (tests/oracles/passes_numpy.py)): log-normal per-pass factors (c.v. = the [dynamics]
    maximum x the pit's unbridged fraction), Gaussian delays, and the intermittent strike of a
-   ball pit (:func:`strike_factors`); a varied row is put through the item's sensor modes again
+   ball pit (:func:`strike_factors`) or, with ``ball_exposure = "kinematic"`` (issue 33), its
+   exposure pass by pass from the ball kinematics (:func:`bearingsim.dynamics.exposure.pass_exposure`,
+   the item key's ``ball_exposure`` stream); a varied row is put through the item's sensor modes again
    (:func:`bearingsim.dynamics.sensor.sensor_filter`, :func:`~bearingsim.dynamics.sensor.run_filter`:
    the first-order-hold filter every simulation uses); :func:`pass_variability` is this step for
    one record (a single simulation applies it too);
@@ -53,6 +55,7 @@ from ..errors import InputError
 from ..names import CLASS_NUMBER
 from .background import BACKGROUND_DEFAULTS, Background, background_labels, background_record, draw_background
 from ..keys import item_keys, stream_key
+from ..dynamics.exposure import EXPOSURE_DEFAULTS, draw_exposure, exposure_at, pass_distance, pass_exposure
 from ..dynamics.passes import PassSettings, pass_variability
 from ..dynamics.sensor import measurement_noise
 from ..programs import jit
@@ -68,6 +71,9 @@ STREAMS = _keys.STREAMS
 LABELS = ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent",
           "background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
           "background_knock_rate_Hz", "finite")
+
+#: the values of ``[dataset] ball_exposure``
+BALL_EXPOSURES = ("gate", "kinematic")
 
 #: probability that an item draws more knocks than :attr:`SignalSettings.knock_max` (the rest dropped)
 KNOCK_TAIL = 1e-12
@@ -107,6 +113,8 @@ class SignalSettings:
     resonance_gain: tuple | None = None
     ingredients: tuple = ()                  # issue 26's ingredients on (names of bearingsim.signals.nuisance.INGREDIENTS)
     nuisance: tuple = ()                     # (key, value) overrides of bearingsim.signals.nuisance.NUISANCE_DEFAULTS
+    ball_exposure: str = "gate"              # "gate" | "kinematic" (issue 33: bearingsim.dynamics.exposure)
+    exposure_ranges: tuple = ()              # (key, (lo, hi)) over bearingsim.dynamics.exposure.EXPOSURE_DEFAULTS (SI)
 
     def __post_init__(self):
         for name in self.__dataclass_fields__:
@@ -118,6 +126,14 @@ class SignalSettings:
         if bad:
             raise InputError(f"unknown realism ingredient(s) {', '.join(map(repr, bad))}: "
                              f"one of {', '.join(_nuisance.INGREDIENTS)}", "check the spelling of ingredients")
+        if self.ball_exposure not in BALL_EXPOSURES:
+            raise InputError(f"ball_exposure must be one of {', '.join(map(repr, BALL_EXPOSURES))}, got "
+                             f"{self.ball_exposure!r}", "'gate': the drawn gate and strikes (issue 26); 'kinematic': "
+                             "the pit's exposure from the ball kinematics (bearingsim.dynamics.exposure)")
+        bad = sorted(set(dict(self.exposure_ranges)) - set(EXPOSURE_DEFAULTS))
+        if bad:
+            raise InputError(f"unknown exposure range(s) {', '.join(bad)}: one of {', '.join(EXPOSURE_DEFAULTS)}",
+                             "the ranges and their defaults are bearingsim.dynamics.exposure.EXPOSURE_DEFAULTS")
         if self.background == "machine" and self.machine is None:
             raise InputError("background 'machine' needs the machine's Background, got machine=None",
                              "pass the machine's Background (bearingsim.signals.background) as machine, or use "
@@ -126,7 +142,7 @@ class SignalSettings:
     def passes(self) -> PassSettings:
         """The settings of the pass-to-pass variability step (:func:`bearingsim.dynamics.pass_variability`)."""
         return PassSettings(self.fs, self.pass_cv_max, self.pass_delay_max, self.pass_lead, self.pass_taper,
-                            bool(self.strike_probability[0] < 1.0))
+                            bool(self.strike_probability[0] < 1.0), self.ball_exposure == "kinematic")
 
     @classmethod
     def from_dataset(cls, ds: dict, fs, samples, realism, modes, machine: Background | None = None):
@@ -148,7 +164,8 @@ class SignalSettings:
                    outer_positions_deg=ds.get("outer_center_positions_deg") or (), modes=(f, z, g),
                    resonance_frequency_Hz=ds.get("resonance_frequency_Hz"),
                    resonance_damping_ratio=ds.get("resonance_damping_ratio"), resonance_gain=ds.get("resonance_gain"),
-                   ingredients=tuple(k for k in _nuisance.INGREDIENTS if k in (ds.get("realism_ingredients") or ())))
+                   ingredients=tuple(k for k in _nuisance.INGREDIENTS if k in (ds.get("realism_ingredients") or ())),
+                   ball_exposure=ds.get("ball_exposure", "gate"), exposure_ranges=_exposure_ranges(ds))
 
     @property
     def ranges(self) -> dict:
@@ -164,6 +181,19 @@ class SignalSettings:
         rate = float(Background(*self.machine).knock_rate) if machine else float(self.ranges["knock_rate_Hz"][1])
         lam = rate * self.samples / self.fs
         return max(1, int(poisson.isf(KNOCK_TAIL, lam)) + 1) if lam > 0 else 1
+
+
+def _exposure_ranges(ds: dict) -> tuple:
+    """The kinematic exposure's ranges of a ``[dataset]`` table (its keys in degrees and cage
+    revolutions) in SI, as (key, (lo, hi)) pairs of :data:`EXPOSURE_DEFAULTS` (absent: the defaults)."""
+    out = {}
+    for key, name, scale in (("ball_pit_latitude_deg", "pit_latitude", np.pi / 180.0),
+                             ("ball_axis_wander_deg", "wander_sd", np.pi / 180.0),
+                             ("ball_axis_correlation_cage_rev", "wander_correlation", 1.0)):
+        if ds.get(key) is not None:
+            lo, hi = ds[key]
+            out[name] = (float(lo) * scale, float(hi) * scale)
+    return tuple(sorted(out.items()))
 
 
 def _logu(key, lo, hi, shape=()):
@@ -241,23 +271,46 @@ def fault_level(a, background, gain, snr_dB, use_snr):
 # --- one item, all items --------------------------------------------------------------------
 
 
+def _ball_exposure(key, pass_times, fault_class, draws: ItemDraws, frequencies, track, s: SignalSettings):
+    """A ball item's per-pass kinematic exposure (P,) (1 for every other class): the pit's
+    latitude and the axis wander drawn from the key's ``ball_exposure`` stream
+    (:func:`bearingsim.dynamics.exposure.draw_exposure`), the pit's spin angle at t = 0 the item's
+    ``spall_center_deg`` (:class:`ItemDraws`), FTF from ``frequencies``."""
+    if frequencies is None or track is None:
+        raise InputError("ball_exposure 'kinematic' needs every item's frequencies and ball track",
+                         "pass frequencies (N, 4) and track (N, 7) (bearingsim.dynamics.exposure.ball_track) to "
+                         "finish_items, as the data set's device program does")
+    kd, kw = jax.random.split(stream_key(key, "ball_exposure"))
+    lat, sd, corr = draw_exposure(kd, s.exposure_ranges)
+    e = pass_exposure(kw, pass_times, frequencies[0], jnp.deg2rad(draws.outer_center_deg), track, lat, sd, corr)
+    return jnp.where(fault_class == CLASS_NUMBER["ball"], e, 1.0)
+
+
 def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
-                s: SignalSettings, frequencies=None):
+                s: SignalSettings, frequencies=None, track=None):
     """One item's record and labels (see the module docstring; :func:`finish_items`).
     ``frequencies``: the item's (FTF, BPFO, BPFI, BSF) in Hz (needed by issue 26's
-    ingredients, :attr:`SignalSettings.ingredients`)."""
+    ingredients, :attr:`SignalSettings.ingredients`, and the kinematic exposure); ``track``: its
+    (7,) :func:`bearingsim.dynamics.exposure.ball_track` (``ball_exposure = "kinematic"``)."""
     T = housing.shape[0]
     fs = s.fs
+    exposure = None
+    if s.ball_exposure == "kinematic":
+        exposure = _ball_exposure(key, pass_times, fault_class, draws, frequencies, track, s)
     a, _, _, cv, jitter = pass_variability(key, housing, sensor, pass_times, unbridged, draws.modes,
-                                           draws.strike_probability, s.passes())
+                                           draws.strike_probability, s.passes(), exposure)
     on = set(s.ingredients)
     if on:
         ns = _nuisance.settings_of(dict(s.nuisance))
         ftf, bpfo, bpfi, bsf = (jnp.zeros(()),) * 4 if frequencies is None else tuple(frequencies)
         kn = jax.random.split(stream_key(key, "nuisance"), 3)
     if "ball_fault_model" in on:     # a ball pit as real damaged balls show it (the fault part only)
+        track_gate = None
+        if exposure is not None:     # the kinematic exposure in time and the passes, for the gate and the bursts
+            t = jnp.arange(T) / fs
+            track_gate = (exposure_at(t, pass_times, exposure), pass_distance(t, pass_times))
         xb, _ = _nuisance.ball_fault_modulation(kn[0], a - jnp.mean(a), fs, shaft_hz, ftf, jnp.where(bsf > 0, bsf, 1.0),
-                                                ns)
+                                                ns, track_gate)
         a = jnp.where(fault_class == CLASS_NUMBER["ball"], xb, a)
     if s.noise_rms > 0.0:
         a = a + measurement_noise(stream_key(key, "noise"), T, s.noise_rms, fs, s.noise_band)
@@ -286,7 +339,7 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
 
 @jit
 def finish_items(keys, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws: ItemDraws,
-                 settings: SignalSettings, frequencies=None):
+                 settings: SignalSettings, frequencies=None, track=None):
     """The stored records (N, T) and labels (dict of (N,) arrays, :data:`LABELS`) of N items, one
     compiled program: ``keys`` (N, 2) uint32 (:func:`item_keys`), the simulated ``housing``
     acceleration and ``sensor`` signal (N, T) m/s^2, ``pass_times`` (N, P) s of the item's
@@ -300,7 +353,14 @@ def finish_items(keys, housing, sensor, pass_times, unbridged, fault_class, shaf
     :func:`bearingsim.signals.nuisance.ball_fault_modulation` before the noise and the fault level; the
     additive :func:`bearingsim.signals.nuisance.nuisance_signal` at the background's RMS after it; the
     whole record through :func:`bearingsim.signals.nuisance.shaft_modulation` last, the order of
-    :func:`bearingsim.signals.nuisance.item_signal`), each from the item key's ``nuisance`` stream."""
+    :func:`bearingsim.signals.nuisance.item_signal`), each from the item key's ``nuisance`` stream.
+    ``track``: (N, 7) every item's :func:`bearingsim.dynamics.exposure.ball_track` (the chunk
+    program's ``ball_track``), needed with ``ball_exposure = "kinematic"``: a ball item's impacts
+    are then scaled pass by pass by their kinematic exposure instead of the drawn strikes, and
+    the ball fault model's gate is that exposure (:func:`bearingsim.signals.nuisance.ball_fault_modulation`)."""
+    if track is not None:
+        return jax.vmap(lambda *a: finish_item(*a[:-2], settings, a[-2], a[-1]))(
+            keys, housing, sensor, pass_times, unbridged, fault_class, shaft_hz, draws, frequencies, track)
     if frequencies is None:
         return jax.vmap(lambda *a: finish_item(*a, settings))(keys, housing, sensor, pass_times, unbridged,
                                                               fault_class, shaft_hz, draws)
