@@ -454,7 +454,7 @@ def test_the_engine_takes_a_built_scenario_not_the_case_api():
 
 
 #: a result code compared by hand with an integer (issue 35 item 3): use errors.succeeded / failed
-HAND_COMPARED = re.compile(r"result\b[\s\"'\]\)]*[!=]=\s*\d")
+HAND_COMPARED = re.compile(r"\b(?:result|code|codes)\b[\s\"'\]\)]*[!=]=\s*0\b")
 
 
 def code_only(path: Path) -> dict:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .. import runtime
 from ..datasets import budget
-from ..errors import InputError
+from ..errors import InputError, failed
 
 
 from .lazy_modules import (cases, dataset_spec, distributed, ident, ident_bank, ident_report, io, jones, lines, np,
@@ -34,9 +34,9 @@ def _wrote(*paths):
 
 def _warn_failures(result, what):
     codes = np.asarray(result)
-    bad = int(np.sum(codes != 0))
+    bad = int(np.sum(failed(codes)))
     if bad:
-        kinds, counts = np.unique(codes[codes != 0], return_counts=True)
+        kinds, counts = np.unique(codes[failed(codes)], return_counts=True)
         why = "; ".join(f"{n}: {jones.RESULTS.of(c).message} (result {int(c)})" for c, n in zip(kinds, counts))
         print(f"bearingsim: warning: {bad} of {codes.size} {what} failed ({why}); they are "
               "flagged in 'converged' (values set to 0)", file=sys.stderr)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, succeeded
 from .. import dynamics
 from ..case.units import from_si, to_si
 from ..physics.defect import LOCATIONS, Spall
@@ -236,9 +236,9 @@ def device_program(plan, pad, threads=None):
     cat = lambda i, k: np.concatenate([p[i][k] for p in parts])  # noqa: E731
     sig_all = np.concatenate([p[0] for p in parts])
     code = cat(2, "result").astype(np.int32)
-    code = np.where((code == 0) & ~cat(1, "finite"), int(DatasetResult.nonfinite_signal), code)
+    code = np.where(succeeded(code) & ~cat(1, "finite"), int(DatasetResult.nonfinite_signal), code)
     code = np.where(cat(2, "pit_ok"), code, int(DatasetResult.pit_contact))
-    ok = code == 0
+    ok = succeeded(code)
     out = dict(signals=np.where(ok[:, None], sig_all, 0.0).astype(np.float32), result=code,
                ball_iterations=cat(2, "ball_iterations"))
     for k in ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent") + BACKGROUND_FIELDS:

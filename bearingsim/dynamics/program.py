@@ -216,11 +216,11 @@ def _run(bearing, curve, prep, keys, loads, theta0, modes, params, iterations, s
         code = jnp.where(failed(sol.result) | ~pit_ok, RESULTS.initial_state.value,
                          jnp.where(~ok, RESULTS.initial_equilibrium.value, 0))
         fits = motion_ok(m, Z, T / fs) & e_ok & p_ok
-        code = jnp.where((code == 0) & ~fits, RESULTS.fixed_size.value, code)
-        code = jnp.where((code == 0) & (needed == 0), RESULTS.ball_solver.value, code)
+        code = jnp.where(succeeded(code) & ~fits, RESULTS.fixed_size.value, code)
+        code = jnp.where(succeeded(code) & (needed == 0), RESULTS.ball_solver.value, code)
         finite = jnp.all(jnp.isfinite(ah)) & jnp.all(jnp.isfinite(sens))
-        code = jnp.where((code == 0) & ~finite, RESULTS.nonfinite.value, code)
-        good = code == 0
+        code = jnp.where(succeeded(code) & ~finite, RESULTS.nonfinite.value, code)
+        good = succeeded(code)
         lab = motion_labels(m)
         return dict(sensor=jnp.where(good, sens, 0.0), housing_acceleration=jnp.where(good, ah, 0.0),
                     result=code.astype(jnp.int32), pass_times=jnp.where(good, passes, jnp.inf),

@@ -646,9 +646,9 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     if held:            # the moments that hold the tilt: the balls' moment sum about the ring centre
         F = jnp.concatenate([F[:3], reactions_from_balls(st, psi)[3:]])
     valid = _validity(bearing, op, st, psi, q, F, Ho + Hi, rtol)
-    code = _load_cause(bearing, op, F_in, st, jnp.where(code == 0, valid, code), code == 0).astype(jnp.int32)
+    code = _load_cause(bearing, op, F_in, st, jnp.where(succeeded(code), valid, code), succeeded(code)).astype(jnp.int32)
     if held:            # a refused state holds nothing: its loads are the applied ones (moments 0)
-        F = jnp.where(code == 0, F, F_in)
+        F = jnp.where(succeeded(code), F, F_in)
     return JonesSolution(q, F, code, total_it, res, cage_angle, psi, st.alpha_inner,
                          st.alpha_outer, st.Q_inner, st.Q_outer, st.delta_inner, st.delta_outer,
                          st.centrifugal, st.gyroscopic_moment, st.orbital_speed, st.beta, Ho,
@@ -679,7 +679,7 @@ def raise_for(sol, what: str = "Jones solve", *, bearing=None, in_set=False):
     ``loads`` (a :class:`JonesSolution`, a set's :class:`~bearingsim.physics.shaft.SetSolution`); the hint
     fits the case (:func:`result_hint`: ``bearing``, ``in_set``)."""
     codes = np.ravel(np.asarray(sol.result))          # any batch shape, flattened
-    bad = np.flatnonzero(codes != 0)
+    bad = np.flatnonzero(failed(codes))
     if not bad.size:
         return
     k = int(bad[0])

@@ -33,7 +33,7 @@ def set_verdict(sol):
     per = np.asarray(sol.bearing_result).reshape(codes.size, -1)
     verdict, which = codes.copy(), np.full(codes.size, -1)
     causes = [int(c) for c in _BEARING_CAUSES]
-    for i in np.flatnonzero(codes != 0):
+    for i in np.flatnonzero(failed(codes)):
         bad = np.flatnonzero(per[i] != 0)
         if bad.size:
             which[i] = int(bad[0])
@@ -77,7 +77,7 @@ def raise_for_set(sol, what: str = "set solve"):
     where one did and the axial load it carries, with the hint for a bearing in a set.  A set's
     hints name what the case can change (loads, preload, arrangement), never a solver option."""
     codes = np.ravel(np.asarray(sol.result))
-    bad = np.flatnonzero(codes != 0)
+    bad = np.flatnonzero(failed(codes))
     if not bad.size:
         return
     verdict, which = set_verdict(sol)

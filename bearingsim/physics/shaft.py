@@ -757,7 +757,7 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         worst = jnp.where(worst == 0, sol.result, worst)
     eq_bad = _equilibrium_bad(sy, [_stack([sols[k] for k in ix]) for ix in index], qmax, F, P, rtol)
     valid = jnp.where(worst != 0, worst, jnp.where(eq_bad, RESULTS.equilibrium, RESULTS.successful))
-    code = jnp.where(code == 0, valid, code).astype(jnp.int32)
+    code = jnp.where(succeeded(code), valid, code).astype(jnp.int32)
     Gz = jnp.stack([(frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k]))[2]
                     for k in range(N)])
     u = sp * (Gz @ x[:5] - x[5:])
