@@ -300,8 +300,13 @@ def _random_cases(draw, n):
 def test_random_search_never_reports_an_invalid_state_as_converged(Z, control, profile, data):
     """Batches of random cases (geometry, loads, speed up to 20 krpm, spalls up to 1 mm deep):
     every converged item has no loaded contact at |alpha| >= 90 deg and holds ring and ball
-    equilibrium (re-derived in numpy, 1e-8); most items converge (the solver is not passing by
-    flagging everything)."""
+    equilibrium (re-derived in numpy, 1e-8); most items are answered (the solver is not passing
+    by flagging everything): converged, or refused for a shoulder that an independent check of the
+    returned state confirms (code 7: a loaded contact at or beyond the low shoulder, or the side
+    load carried at the groove bottom; code 8: a loaded contact at or beyond the high shoulder;
+    from the per-ball angles and the loads, as test_global_equilibrium_random_combined_loads).
+    Counting only converged items made the bar depend on how many random heavy combined loads
+    climb a shoulder: 11 of 24 converged with 10 confirmed shoulder refusals failed it (issue 35)."""
     rows = _random_cases(data.draw, 24)
     col = lambda *keys: jnp.array([[r[k] for k in keys] for r in rows])
     geo, F = col("D", "dm", "fi", "fo", "a0"), col("Fx", "Fy", "Fa", "Mx", "My")
@@ -317,7 +322,16 @@ def test_random_search_never_reports_an_invalid_state_as_converged(Z, control, p
         assert equilibrium_error(bk, one, opk) <= 1e-8, rows[k]
         assert ball_equilibrium_error(bk, one, opk) <= 1e-8, rows[k]
         assert np.all(np.isfinite(np.asarray(one.stiffness)))
-    assert np.mean(codes == 0) >= 0.5, np.unique(codes, return_counts=True)
+    confirmed = 0
+    for k in np.flatnonzero((codes == int(jones.RESULTS.low_shoulder)) | (codes == int(jones.RESULTS.over_shoulder))):
+        one = jax.tree_util.tree_map(lambda a: a[k], sols)
+        bk = bs.Bearing(Z, *np.asarray(geo[k]))
+        if codes[k] == int(jones.RESULTS.low_shoulder):
+            confirmed += beyond_low_shoulder(bk, one) or at_groove_bottom(bk, one, np.asarray(F[k]))
+        else:
+            confirmed += beyond_high_shoulder(bk, one)
+    answered = (np.sum(codes == 0) + confirmed) / codes.size
+    assert answered >= 0.5, (answered, np.unique(codes, return_counts=True))
 
 
 @functools.lru_cache(maxsize=None)
