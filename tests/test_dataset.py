@@ -174,7 +174,7 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
             x[[1, 4]] = np.nan
             z = jnp.zeros(n)
             return dict(sensor=jnp.asarray(x), housing_acceleration=jnp.asarray(x), result=jnp.asarray(code),
-                        pass_times=jnp.full((n, 1), jnp.inf), pass_jitter_percent=z, shaft_Hz=z + 30.0,
+                        pass_times=jnp.full((n, 1), 1e-3), pass_jitter_percent=z, shaft_Hz=z + 30.0,
                         ftf_Hz=z + 1.0, bpfo_Hz=z + 10.0, bpfi_Hz=z + 12.0, bsf_Hz=jnp.full(n, jnp.nan),
                         pit_depth=z, unbridged=z, pit_ok=jnp.ones(n, bool), ball_iterations=1)
 
@@ -585,3 +585,55 @@ def test_cli_dataset_flags_override_the_spec(monkeypatch, tmp_path, capsys):
     assert "--count 0" in capsys.readouterr().err
     assert main(["dataset", str(p), "-o", str(tmp_path / "d.h5"), "--duration-s", "-1"]) == 2
     assert "--duration-s -1" in capsys.readouterr().err
+
+
+def test_a_fault_that_makes_no_impact_is_excluded_not_rescaled(tmp_path, capsys):
+    """fault_snr_dB scales a fault item's bearing signal to a drawn level over the background.  A
+    fault item whose defect makes no impact in the record (an outer pit at 12:00, where under a
+    radial load with little axial load the ball is off the raceway: effective depth 0; a ball
+    pit that strikes none of the record's passes) has only the healthy bearing's signal, and the
+    scaling would turn it into a healthy record under a fault label (gains up to 1e8 before).
+    Such items are flagged ``fault_not_excited``: zero signal, counted apart from failures (the
+    data set does not raise), dropped by load_dataset, named by the CLI.  The depths are checked
+    against the independent single healthy solve (realism.pit_effective_depth); the 6:00 items
+    of the same run (load-zone centre) are kept.  (A ball pit that struck on no pass:
+    tests/test_signal_stage.py, ``struck``.)"""
+    from bearingsim import load_dataset
+    from bearingsim.datasets import DatasetResult
+    from bearingsim.physics.pit import EXCITED_DEPTH_MIN
+    from bearingsim.realism import rig_record as rl
+
+    case = load_case(ROOT / "cases" / "dataset_cwru.toml")      # the programs of the pit-depth test above
+    for k, v in {"dataset.count": 8, "dataset.chunk": 8, "dataset.healthy_fraction": 0.0,
+                 "dataset.speed_rpm": [1797, 1797], "dataset.radial_N": [400, 400], "dataset.axial_N": [10, 10],
+                 "dataset.duration_s": 0.02, "dataset.outer_center_positions_deg": [0, 180],
+                 "dynamics.sample_rate_Hz": 12000}.items():
+        case = case.with_value(k, v)
+    s = dataset_case(case, tmp_path / "d.h5")          # throw=True: an excluded item is no failure
+    with h5py.File(tmp_path / "d.h5") as f:
+        L, X = f["labels"][()], f["signals"][()]
+    out = L["result"] == int(DatasetResult.fault_not_excited)
+    top, bottom = L["spall_center_deg"] == 180, L["spall_center_deg"] == 0
+    assert top.any() and bottom.any() and np.all(top | bottom)
+    assert np.array_equal(out, top) and np.all(L["result"][~out] == 0)
+    assert np.all(X[out] == 0.0) and np.all(np.abs(X[~out]).max(axis=1) > 0)
+    assert s.failed == 0 and s.excluded == int(out.sum()) and s.failures == {int(DatasetResult.fault_not_excited): s.excluded}
+    # the independent single solve: the ball at 12:00 carries no load, the one at 6:00 does
+    sc = case.with_value("load.radial_x_N", 400.0).with_value("load.axial_N", 10.0)
+    w, h = 0.5334e-3, 0.2794e-3
+    up = rl.pit_effective_depth(sc.bearing(), sc.operation(), sc.loads(), w, h, center=np.pi)
+    down = rl.pit_effective_depth(sc.bearing(), sc.operation(), sc.loads(), w, h, center=0.0)
+    assert up.depth < EXCITED_DEPTH_MIN < down.depth
+    assert np.all(L["effective_depth_mm"][top] * 1e-3 < EXCITED_DEPTH_MIN)
+    assert np.all(L["effective_depth_mm"][bottom] * 1e-3 > 10 * EXCITED_DEPTH_MIN)
+    X2, L2, meta = load_dataset(tmp_path / "d.h5")
+    assert len(X2) == int((~out).sum()) and meta["failed_dropped"] == int(out.sum())
+    # the CLI names them apart from failures (its summary of this run)
+    from bearingsim.app import signal_workflows
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(signal_workflows, "dataset_case", lambda *a, **k: s)
+        assert main(["dataset", str(ROOT / "cases" / "dataset_cwru_4class.toml"), "-o", str(tmp_path / "d.h5")]) == 0
+    cap = capsys.readouterr()
+    assert f"{s.excluded} of 8 fault items excluded: the fault makes no impact" in cap.out
+    assert "all other items simulated successfully" in cap.out and "failed" not in cap.err

@@ -357,6 +357,21 @@ def test_finish_items_varies_passes_like_numpy_then_runs_the_item_modes():
     assert np.all(np.asarray(lab["snr_dB"]) == 0) and np.all(np.asarray(lab["background_noise_rms_m_s2"]) == 0)
 
 
+def test_struck_says_whether_the_defect_struck_inside_the_record():
+    """``struck`` (the caller's test for a fault item that makes no impact): False for a record
+    with no pass inside it and for a ball pit whose strike probability (1e-3) missed every one
+    of its 12 passes (none strikes with probability 0.988 per item; the keys are fixed); True
+    for the other classes, which strike on every pass."""
+    st = settings(background="none", ball_strike_probability=(0.001, 0.001))
+    inp = chunk_inputs(8, seed=3)
+    inp["pass_times"][:] = np.inf
+    inp["pass_times"][:, :12] = 0.004 + np.arange(12) / 120.0
+    inp["pass_times"][[0, 1], :12] += 1.0              # items 0 and 1: every pass after the record's 0.2 s
+    out, lab = run(st, np.arange(8), inp)
+    want = (inp["fault_class"] != 3) & (np.arange(8) > 1)
+    assert np.array_equal(np.asarray(lab["struck"]), want)
+
+
 def test_machine_background_settings():
     bg = Background((0.2, 0.05), 50.0, (0.03,), 0.4, (100.0, 1000.0, 4000.0), (0.0, 10.0, -5.0), (0.2,), 3.0, 1.5,
                     2500.0, 0.03, ())

@@ -253,12 +253,18 @@ def cmd_dataset(args):
             s = signal_workflows.dataset_case(case, args.output, runner=runner, **kw)
     print(f"{case.title}: {s.count} items x {s.samples} samples in {s.seconds:.1f} s "
           f"({s.seconds_per_item:.3f} s per item, compilation included) on {s.device}, {s.chunk} items per chunk")
+    out = int(dataset_spec.DatasetResult.fault_not_excited)
     if s.failed:
-        detail = ", ".join(f"{n} {dataset_spec.DatasetResult(c).message}" for c, n in sorted(s.failures.items()))
+        detail = ", ".join(f"{n} {dataset_spec.DatasetResult(c).message}" for c, n in sorted(s.failures.items())
+                           if c != out)
         print(f"bearingsim: warning: {s.failed} of {s.count} items failed ({detail}); their "
               "signals are zero and labels/result != 0", file=sys.stderr)
-    else:
-        print("all items simulated successfully")
+    if s.excluded:
+        m = dataset_spec.DatasetResult.fault_not_excited
+        print(f"{s.excluded} of {s.count} fault items excluded: {m.message} (labels/result {int(m)}, signal "
+              f"zero; load_dataset drops them).  To keep them: {m.hint}")
+    if not s.failed:
+        print(f"all {'other ' if s.excluded else ''}items simulated successfully")
     _wrote(args.output)
     _compiled(case, "dataset")
     return 0

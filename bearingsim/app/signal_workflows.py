@@ -119,7 +119,8 @@ def compare_case(case, *, throw=True, max_angles=721) -> Comparison:
 def dataset_case(case, path, *, throw=True, progress=False, runner=None, device=None, chunk=None,
                  compression=None):
     """Simulate the case's ``[dataset]`` into ``path`` (HDF5; ``dataset.make_dataset``).  Items
-    that failed are in the file with a zero signal and a code; ``throw`` raises after writing.
+    that failed are in the file with a zero signal and a code; ``throw`` raises after writing
+    (not for items excluded as ``fault_not_excited``: :class:`~bearingsim.datasets.DatasetSummary`).
     ``runner``: a :class:`bearingsim.datasets.distributed.DaskRunner` to run the chunks on a Dask cluster
     (same file); None runs them in this process.  ``device`` ("cpu", "gpu", None: JAX's
     default), ``chunk`` (items per chunk; 0: fill the device) and ``compression`` (of /signals)

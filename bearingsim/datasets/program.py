@@ -31,6 +31,7 @@ from ..case.units import from_si, to_si
 from ..physics.defect import LOCATIONS, Spall
 from ..physics.jones import load_vector
 from ..physics.kinematics import Operation
+from ..physics.pit import excited
 from ..signals.signal_stage import ItemDraws, finish_items
 from .spec import DatasetResult, item_locations, slots_of
 
@@ -238,6 +239,13 @@ def device_program(plan, pad, threads=None):
     code = cat(2, "result").astype(np.int32)
     code = np.where(succeeded(code) & ~cat(1, "finite"), int(DatasetResult.nonfinite_signal), code)
     code = np.where(cat(2, "pit_ok"), code, int(DatasetResult.pit_contact))
+    # a fault item whose pit makes no impact in the record would be a healthy record under a fault label:
+    # a pit the ball does not load (depth_rule "pit"), or a ball pit that struck on none of the passes
+    quiet = ~cat(1, "struck")
+    if plan.pit:
+        quiet = quiet | ~excited(np.asarray(cat(2, "pit_depth"), float))
+    code = np.where(succeeded(code) & (plan.lab["fault_class"][pad] > 0) & quiet,
+                    int(DatasetResult.fault_not_excited), code)
     ok = succeeded(code)
     out = dict(signals=np.where(ok[:, None], sig_all, 0.0).astype(np.float32), result=code,
                ball_iterations=cat(2, "ball_iterations"))

@@ -33,7 +33,7 @@ from ..errors import BearingsimError, failed, InputError, SettingWarning
 from ..signals.background import Background
 from ..signals.signal_stage import SignalSettings
 from .program import CHUNK_FIELDS, Physics, micro_batch, program_threads, run_settings, simulate_chunk
-from .spec import (DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
+from .spec import (DatasetResult, DatasetSummary, defect_geometry, draw_labels, settings, simulation_order, slots_of,
                    transfer_paths)
 from .progress import Display, RunProgress
 from .writer import (assemble, chunk_path, compression_options, finished_chunks, open_partial, partial_path,
@@ -302,6 +302,7 @@ def _make_dataset(sc: Scenario, path, track, runner, *, device, chunk, compressi
         raise Interrupted(f"{how}: stopped with {done} of {n} items finished, kept in {folder}; run "
                           "the same command again to continue") from None
     bad = failed(lab["result"])
+    out = lab["result"] == int(DatasetResult.fault_not_excited)
     codes, counts = np.unique(lab["result"][bad], return_counts=True)
-    return DatasetSummary(Path(path), n, T, int(bad.sum()), time.perf_counter() - t0,
-                          {int(c): int(k) for c, k in zip(codes, counts)}, str(dev), chunk)
+    return DatasetSummary(Path(path), n, T, int((bad & ~out).sum()), time.perf_counter() - t0,
+                          {int(c): int(k) for c, k in zip(codes, counts)}, str(dev), chunk, int(out.sum()))

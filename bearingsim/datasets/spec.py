@@ -93,11 +93,19 @@ def _result_members():
                                             "parameters")),
                       ("pit_contact", (nonfinite + 1, "the healthy quasi-static state at the pit (for its "
                                        "effective depth, dataset.depth_rule = \"pit\") did not converge",
-                                       "narrow the [dataset] load and speed ranges"))]
+                                       "narrow the [dataset] load and speed ranges")),
+                      ("fault_not_excited", (nonfinite + 2, "the fault makes no impact in the record (its "
+                       "pit lies where the ball carries almost no load: effective depth below 10 nm, "
+                       "bearingsim.physics.pit.EXCITED_DEPTH_MIN; or a ball pit struck on none of the "
+                       "record's passes), so the record would be a healthy bearing's under a fault label; "
+                       "excluded",
+                       "keep outer_center_positions_deg inside the load zone or raise the axial_N range "
+                       "(every ball loaded); a longer duration_s or a higher ball_strike_probability"))]
 
 
 #: per-item result codes of a data set (``/labels`` field ``result``): the simulation codes of
-#: bearingsim.dynamics, plus ``nonfinite_signal``.  Members carry ``message`` and ``hint``.
+#: bearingsim.dynamics, plus ``nonfinite_signal``, ``pit_contact`` and ``fault_not_excited`` (an
+#: item excluded, not a failure: :class:`DatasetSummary`).  Members carry ``message`` and ``hint``.
 DatasetResult = ResultCode("DatasetResult", _result_members(), module="bearingsim.datasets")
 
 
@@ -108,9 +116,11 @@ def result_messages() -> dict:
 
 @dataclass(frozen=True)
 class DatasetSummary:
-    """What :func:`make_dataset` wrote: ``failed`` items (``failures``: code -> count of the
-    :data:`DatasetResult` codes != 0 among them); ``device`` the JAX device the chunks ran on;
-    ``chunk`` the items per chunk."""
+    """What :func:`make_dataset` wrote: ``failed`` items (a simulation failed), ``excluded``
+    items (``fault_not_excited``: the simulation is right, but a fault item of it would be a
+    healthy record; :func:`bearingsim.datasets.load_dataset` drops both), ``failures``: code ->
+    count of every :data:`DatasetResult` code != 0 among them; ``device`` the JAX device the
+    chunks ran on; ``chunk`` the items per chunk."""
 
     path: Path
     count: int
@@ -120,6 +130,7 @@ class DatasetSummary:
     failures: dict = field(default_factory=dict)
     device: str = ""
     chunk: int = 0
+    excluded: int = 0
 
     @property
     def converged(self) -> bool:

@@ -37,8 +37,10 @@ __all__ = ["CHUNK_FORMAT", "COMPRESSIONS", "DEFAULT_COMPRESSION", "partial_path"
 #: layout of the chunk files (4: a folder of .npy arrays per chunk; items drawn from keys; 5: one
 #: registry of streams, the chunk on the device, pit labels and ball_iterations per item; 6: the
 #: programs sized by the spec's speed bound, so the slip walk's knot count and with it the motion
-#: draws changed, issue 32); a partial folder of another layout is refused like one of another spec
-CHUNK_FORMAT = 6
+#: draws changed, issue 32; 7: fault items that make no impact flagged fault_not_excited and zeroed,
+#: so a cached identify bank of 6 holding them is not reused); a partial folder of another layout is
+#: refused like one of another spec
+CHUNK_FORMAT = 7
 #: codecs of /signals: name -> h5py create_dataset keywords
 COMPRESSIONS = {"none": {}, "lzf": {"compression": "lzf"}, "gzip": {"compression": "gzip", "compression_opts": 4},
                 "gzip1": {"compression": "gzip", "compression_opts": 1}, "zstd": None}

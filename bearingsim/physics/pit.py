@@ -30,7 +30,8 @@ from .jones import solve
 
 __all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
            "pit_depth", "pit_effective_depth", "pit_depth_of_solution", "unbridged_fraction",
-           "pit_unbridged_fraction", "pass_cv", "load_fraction", "effective_depth", "unbridged", "pit_of_solution"]
+           "pit_unbridged_fraction", "pass_cv", "load_fraction", "effective_depth", "unbridged", "pit_of_solution",
+           "EXCITED_DEPTH_MIN", "excited"]
 
 # ------------------------------------------------------------------------------ pit physics
 def pit_load_fraction(a, b, pit_diameter, offset=0.0, n=2001) -> float:
@@ -59,6 +60,20 @@ class Contact(NamedTuple):
     Q: float                # load (N)
     alpha: float            # contact angle (rad)
     offset: float           # contact centre to the groove bottom across the track, f D sin(alpha) (m)
+
+
+#: the smallest effective depth (m) of a pit that makes a fault signal: 10 nm, below the surface
+#: roughness of the finest superfinished raceways and balls (Rq ~ 0.02-0.05 um).  A pit where the
+#: ball carries (almost) no load, an outer-race pit outside the load zone, has a smaller one
+#: (0 where the ball is off the raceway): the ball rolls over it as over the healthy raceway, and a
+#: record of it is a healthy bearing's record, whatever its label says.
+EXCITED_DEPTH_MIN = 10e-9
+
+
+def excited(effective_depth):
+    """Whether a pit of this effective depth (m; :func:`pit_depth`, any array) makes a fault
+    signal: ``effective_depth >= EXCITED_DEPTH_MIN`` (NumPy or JAX arrays)."""
+    return effective_depth >= EXCITED_DEPTH_MIN
 
 
 #: where a pit sits: the outer or inner groove bottom, or a point of a ball's surface

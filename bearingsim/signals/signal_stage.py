@@ -70,7 +70,7 @@ STREAMS = _keys.STREAMS
 #: label fields :func:`finish_items` returns, each (N,)
 LABELS = ("signal_gain", "snr_dB", "pass_amplitude_cv_percent", "pass_delay_sd_percent",
           "background_noise_rms_m_s2", "background_shaft_rms_m_s2", "background_line_rms_m_s2",
-          "background_knock_rate_Hz", "finite")
+          "background_knock_rate_Hz", "finite", "struck")
 
 #: the values of ``[dataset] ball_exposure``
 BALL_EXPOSURES = ("gate", "kinematic")
@@ -297,7 +297,7 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
     exposure = None
     if s.ball_exposure == "kinematic":
         exposure = _ball_exposure(key, pass_times, fault_class, draws, frequencies, track, s)
-    a, _, _, cv, jitter = pass_variability(key, housing, sensor, pass_times, unbridged, draws.modes,
+    a, fac, _, cv, jitter = pass_variability(key, housing, sensor, pass_times, unbridged, draws.modes,
                                            draws.strike_probability, s.passes(), exposure)
     on = set(s.ingredients)
     if on:
@@ -333,7 +333,10 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
                                                   jnp.sqrt(jnp.mean(x * x)), ns)[0]
     if "shaft_modulation" in on:     # the whole record (fault, background, nuisance)
         out = _nuisance.shaft_modulation(kn[2], out, fs, shaft_hz, ns)[0]
-    labels.update(signal_gain=gain, snr_dB=snr, finite=jnp.all(jnp.isfinite(out)))
+    # whether the defect struck at all inside the record (a pass at >= 1 % of its impact): a ball pit
+    # that missed every pass leaves a healthy record (the caller flags a fault item without one)
+    struck = jnp.any(jnp.isfinite(pass_times) & (pass_times < T / fs) & (fac[1:] >= 0.01))
+    labels.update(signal_gain=gain, snr_dB=snr, finite=jnp.all(jnp.isfinite(out)), struck=struck)
     return out, labels
 
 
@@ -347,7 +350,8 @@ def finish_items(keys, housing, sensor, pass_times, unbridged, fault_class, shaf
     ``shaft_hz`` (N,), the items' :class:`ItemDraws` (:func:`draw_items`).  A row whose pit is
     not bridged (unbridged > 0) or strikes intermittently is varied pass by pass and put
     through its modes again; the others keep ``sensor``.  ``finite`` is False where the record
-    is not finite (the caller flags and zeroes it).  ``frequencies``: (N, 4) FTF, BPFO, BPFI,
+    is not finite (the caller flags and zeroes it); ``struck`` is False where the defect struck on
+    none of the record's passes (a ball pit that missed them all: the caller flags a fault item).  ``frequencies``: (N, 4) FTF, BPFO, BPFI,
     BSF in Hz of every item (the chunk program's outputs), for issue 26's ingredients
     (:attr:`SignalSettings.ingredients`: a ball item's fault part re-shaped by
     :func:`bearingsim.signals.nuisance.ball_fault_modulation` before the noise and the fault level; the
