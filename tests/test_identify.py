@@ -345,9 +345,16 @@ def test_class_probabilities_are_calibrated_on_items_never_seen(identifier, fres
 
 def test_the_size_interval_covers_on_items_never_seen(identifier, fresh):
     """The 90 % interval of the length (class given, so that class errors do not count) covers
-    the true length on the held-out fault items at least as often as a true 90 % interval does
-    with probability 99 % (binomial: e.g. 24 of 30)."""
-    from scipy.stats import binom
+    the true length on the held-out fault items at least as often as a split-conformal 90 %
+    interval does with probability 99 %.  Its coverage is itself random through the n items that
+    calibrated it: Beta(n + 1 - l, l) with l = floor((n + 1) 0.1) (Vovk 2012; Angelopoulos & Bates
+    2021, sec. 3.2), so the count inside of m held-out items is beta-binomial, not binomial (with
+    the test bank's n ~ 14-20 calibration items the binomial bound, 17 of 23, fails a correct
+    interval 1-4 % of the time instead of 1 %; measured 16 of 23 on the spec without issue 26's
+    ingredients, docs/identify.md)."""
+    import math
+
+    from scipy.stats import betabinom
 
     from bearingsim.realism.identify import identify
 
@@ -365,7 +372,10 @@ def test_the_size_interval_covers_on_items_never_seen(identifier, fresh):
         lo, hi = r.length_interval_mm
         inside += lo <= lb["spall_length_mm"] <= hi
     assert n >= 20, f"only {n} intervals"
-    assert inside >= binom.ppf(0.01, n, 0.90), f"{inside} of {n} lengths inside the 90 % interval"
+    cal = identifier.calibration["size_calibration_items"]
+    low = math.floor((cal + 1) * 0.10)
+    bound = betabinom.ppf(0.01, n, cal + 1 - low, low)
+    assert inside >= bound, f"{inside} of {n} lengths inside the 90 % interval (calibrated on {cal}; bound {bound:g})"
 
 
 def test_round_trip_on_fresh_simulated_records(identifier, fresh):

@@ -103,18 +103,16 @@ def test_dev_figures_by_hand():
 
 
 #: the training set of both floors below: the shipped four-class spec at the benchmark's sampling
-#: (0.2 s items at 12 kHz), DEV_COUNT items, every issue 26 ingredient (the shipped spec's own
-#: ``realism_ingredients``: simulated once for the module)
+#: (0.2 s items at 12 kHz), DEV_COUNT items, the shipped spec's own ``realism_ingredients`` (none
+#: since issue 33's measurement, docs/realism.md; simulated once for the module)
 DEV_COUNT = 120
 
 
 @pytest.fixture(scope="module")
 def train(tmp_path_factory):
     pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")
-    from bearingsim.signals.nuisance import INGREDIENTS
-
     spec = load_case("dataset_cwru_4class")
-    assert tuple(spec.get("dataset.realism_ingredients")) == INGREDIENTS     # the shipped spec has them all
+    assert tuple(spec.get("dataset.realism_ingredients")) == ()     # the shipped spec: none (docs/realism.md)
     spec = (spec.with_value("dynamics.sample_rate_Hz", 12000).with_value("dataset.duration_s", 0.2)
             .with_value("dataset.count", DEV_COUNT))
     path = tmp_path_factory.mktemp("transfer") / "train.h5"
@@ -146,11 +144,13 @@ def test_plot_transfer_writes_the_figure(tmp_path):
 
 #: floor of the development set (issue 26), Y-graded records (normal included), both classifiers,
 #: trained on DEV_COUNT items of the shipped spec with every issue 26 ingredient, tested on the
-#: first DEV_WINDOWS windows (0.2 s) of every Y-graded record: measured 0.731 (RF) and 0.761 (LR)
-#: (2026-11-27, chunk format 7; ball recall 0.03 / 0.17: the target >= 0.95 is not met,
-#: docs/realism.md); set just under it
+#: first DEV_WINDOWS windows (0.2 s) of every Y-graded record: measured 0.719 (RF) and 0.664 (LR)
+#: (2026-11-27, chunk format 7, the shipped spec without issue 26's ingredients; with them 0.731 /
+#: 0.761: a 120-item set moves by more than that between specs, the 300-item benchmark with two
+#: seeds measures RF 0.734 / 0.738 and LR 0.739 / 0.712 without them, docs/realism.md; ball recall
+#: 0.03 / 0.10: the target >= 0.95 is not met); set just under it, per classifier
 DEV_WINDOWS = 10
-FLOOR_DEV_Y = 0.70
+FLOOR_DEV_Y = {"random_forest": 0.70, "logistic_regression": 0.65}
 
 
 @needs_data
@@ -162,7 +162,7 @@ def test_dev_set_floor(train):
     for r in reports:
         f = dev_figures(r, dev_records("Y"))
         print(f"{r.classifier}: Y-graded balanced {f.balanced_accuracy:.3f}, recall {f.recall}")
-        assert f.balanced_accuracy >= FLOOR_DEV_Y, f"{r.classifier}: {f}"
+        assert f.balanced_accuracy >= FLOOR_DEV_Y[r.classifier], f"{r.classifier}: {f}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -247,15 +247,15 @@ def test_hit_records_are_the_npz_metadata():
 #: floors of the plain feature set on CWRU (issue 33): the module's ``train`` set (DEV_COUNT items
 #: of 0.2 s at 12 kHz), the first DEV_WINDOWS windows of every Y-graded record; balanced accuracy
 #: per classifier, set just under the figure measured with this configuration (docstring below)
-FLOOR_DEV_Y_PLAIN = {"random_forest": 0.69, "logistic_regression": 0.61}
+FLOOR_DEV_Y_PLAIN = {"random_forest": 0.67, "logistic_regression": 0.72}
 
 
 @needs_data
 @pytest.mark.slow
 def test_dev_set_floor_plain_features(train):
-    """Measured (2026-11-27, 2-core CPU, make test's XLA flags), with the fault items that make no
-    impact excluded (chunk format 7): RF 0.694, LR 0.619 (before: 0.714 / 0.639; Y-graded
-    balanced; the own features on the same set: 0.731 / 0.761; LR's healthy recall 0.50)."""
+    """Measured (2026-11-27, 2-core CPU, make test's XLA flags), chunk format 7 and the shipped spec
+    without issue 26's ingredients: RF 0.681, LR 0.731 (with them 0.694 / 0.619; before format 7
+    0.714 / 0.639; Y-graded balanced; the own features on the same set: 0.719 / 0.664)."""
     spec, path = train
     reports = transfer_benchmark(path, DATA, fault_orders(spec.bearing()), 0.2, dev_records("Y"),
                                  max_windows=DEV_WINDOWS, features="plain")
@@ -272,8 +272,8 @@ HIT_COUNT = 64
 HIT_WINDOWS = 10
 #: balanced accuracy (three classes) per (feature set, classifier), set just under the figure
 #: measured with this configuration (test docstring)
-FLOOR_HIT = {("own", "random_forest"): 0.87, ("own", "logistic_regression"): 0.89,
-             ("plain", "random_forest"): 0.94, ("plain", "logistic_regression"): 0.86}
+FLOOR_HIT = {("own", "random_forest"): 0.96, ("own", "logistic_regression"): 0.80,
+             ("plain", "random_forest"): 0.97, ("plain", "logistic_regression"): 0.83}
 HIT_DATA = None if DATA is None or not (DATA / "hit_mfs").is_dir() else DATA / "hit_mfs"
 
 
@@ -282,10 +282,11 @@ HIT_DATA = None if DATA is None or not (DATA / "hit_mfs").is_dir() else DATA / "
 @pytest.mark.slow
 def test_hit_floor(tmp_path):
     """Measured under make test's XLA_FLAGS=--xla_backend_optimization_level=0 (2026-11-27, 2-core
-    CPU), since the fault items that make no impact are excluded (chunk format 7): own RF 0.881, own
-    LR 0.900, plain RF 0.952, plain LR 0.870 (before: 0.926 / 0.841 / 0.930 / 0.819), balanced over
-    the three classes; healthy is the weak class (recall 0.67 / 0.70 / 0.87 / 0.73, outer and
-    inner 0.88-1.00).  The floors sit 0.01 under.  42-46 s on the shared 2-core machine,
+    CPU), chunk format 7 and the shipped spec without issue 26's ingredients: own RF 0.978, own LR
+    0.811, plain RF 0.985, plain LR 0.844 (with them 0.881 / 0.900 / 0.952 / 0.870; before format 7
+    0.926 / 0.841 / 0.930 / 0.819), balanced over the three classes; the LR's weak classes are
+    healthy (recall 0.73 / 0.53) and, own, inner (0.70).  The floors sit 0.01-0.02 under.
+    42-46 s on the shared 2-core machine,
     cold or with a filled compilation cache (the HIT speed bound sizes a program of its own; the
     module's CWRU fixture costs 80-240 s the same way)."""
     pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")

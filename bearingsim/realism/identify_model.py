@@ -162,6 +162,7 @@ def train_identifier(feats: dict, bank="", prior_mm=None) -> Identifier:
         "ece_raw_test": expected_calibration_error(ident.raw_proba(wf[te]), cls[te]),
         "ece_test": expected_calibration_error(ident.class_proba(wf[te]), cls[te]),
         "class_accuracy_test": float(np.mean(clf.predict(wf[te]) == cls[te])) if te.any() else float("nan"),
+        "size_calibration_items": int(np.sum(va & fault)),
         "size_coverage_test": float(np.mean(np.abs(r_te) <= ident.q_log)) if r_te.size else float("nan"),
         "size_test_items": int(r_te.size),
         "median_rel_error_test": float(np.median(np.abs(np.expm1(r_te)))) if r_te.size else float("nan")}
