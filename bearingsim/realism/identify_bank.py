@@ -56,9 +56,13 @@ def cache_dir() -> Path:
 
 
 def bank_name(count, seed) -> str:
-    """The cached bank's file name: its size and seed, and the data set format it was simulated
-    with (a bank from an older engine, whose random streams or physics differ, is not reused)."""
-    return f"identify_bank_{count}_{seed}_v{CHUNK_FORMAT}.h5"
+    """The cached bank's file name: its size and seed, the data set format it was simulated with
+    and a digest of its spec's text (a bank from an older engine, whose random streams or physics
+    differ, or from another version of the shipped spec is not reused)."""
+    import hashlib
+
+    digest = hashlib.sha256(bank_spec(count, seed).text.encode()).hexdigest()[:8]
+    return f"identify_bank_{count}_{seed}_v{CHUNK_FORMAT}_{digest}.h5"
 
 
 def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Path:

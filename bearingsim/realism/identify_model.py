@@ -174,7 +174,7 @@ _DEFAULT = {}
 
 def default_identifier(count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Identifier:
     """The identifier of the default bank: the file $BEARINGSIM_IDENTIFY_BANK when set, else
-    ``identify_bank_<count>_<seed>_v<format>.h5`` in :func:`bearingsim.realism.identify_bank.cache_dir`
+    ``identify_bank_<count>_<seed>_v<format>_<spec digest>.h5`` in :func:`bearingsim.realism.identify_bank.cache_dir`
     (simulated on first use, with an estimate and a progress bar)."""
     env = os.environ.get("BEARINGSIM_IDENTIFY_BANK")
     p = Path(env) if env else cache_dir() / bank_name(count, seed)
