@@ -343,3 +343,24 @@ def _batch(Z, control, profile):
                                  speed_steps=2)
 
     return jax.jit(jax.vmap(one), compiler_options=compiler_options())
+
+def test_default_materials_stay_concrete_when_first_imported_inside_a_trace():
+    """``bearingsim.Bearing`` imports physics/geometry lazily; a first use inside a user's
+    jax.jit trace used to make its module constants STEEL and SILICON_NITRIDE out of that
+    trace's tracers, which every later Bearing with the default materials then carried (a
+    second program failed with "Execution supplied 5 arguments but compiled program expected
+    11": the random search below, run alone).  A fresh interpreter, geometry not yet imported:
+    the constants are concrete after the trace and a second program runs."""
+    import subprocess
+    import sys
+
+    code = ("import sys, jax, jax.numpy as jnp; import bearingsim as bs; "
+            "assert 'bearingsim.physics.geometry' not in sys.modules; "
+            "f = lambda D: bs.Bearing(9, D, 0.039, 0.52, 0.52, 0.0).effective_modulus; "
+            "a = float(jax.jit(f)(0.00794)); "
+            "from bearingsim.physics import geometry as G; "
+            "bad = [n for m in (G.STEEL, G.SILICON_NITRIDE) for n in ('youngs_modulus', 'poisson_ratio', 'density') "
+            "if isinstance(getattr(m, n), jax.core.Tracer)]; "
+            "assert not bad, bad; b = float(jax.jit(f)(0.00794)); assert a == b and a > 2e11, (a, b); print('ok')")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and "ok" in p.stdout, p.stdout[-2000:] + p.stderr[-2000:]

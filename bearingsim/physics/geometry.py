@@ -7,6 +7,7 @@ with the ball count ``n_balls`` static (one compilation per ball count).
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from ..errors import InputError
@@ -55,10 +56,14 @@ class Material(eqx.Module):
     density: jnp.ndarray = eqx.field(converter=_f64)
 
 
-#: Bearing steel as used by Harris & Kotzalas for the 218 example.
-STEEL = Material(207.5e9, 0.3, 7850.0)
-#: Hot-isostatically pressed silicon nitride (hybrid bearing balls).
-SILICON_NITRIDE = Material(310.0e9, 0.26, 3200.0)
+# The module is imported lazily (``bearingsim.Bearing``), possibly for the first time inside a
+# user's jax.jit trace: its constants are made under ensure_compile_time_eval, so that they are
+# concrete arrays and never that trace's tracers (which every later Bearing would then carry).
+with jax.ensure_compile_time_eval():
+    #: Bearing steel as used by Harris & Kotzalas for the 218 example.
+    STEEL = Material(207.5e9, 0.3, 7850.0)
+    #: Hot-isostatically pressed silicon nitride (hybrid bearing balls).
+    SILICON_NITRIDE = Material(310.0e9, 0.26, 3200.0)
 
 
 class Bearing(eqx.Module):
