@@ -36,7 +36,7 @@ assert len(set(STREAMS.values())) == len(STREAMS), "stream numbers must be disti
 def item_keys(seed, index):
     """(N, 2) uint32 keys of the items ``index`` of a run seeded ``seed``:
     ``fold_in(PRNGKey(seed), i)`` (depends on (seed, index) only, not on the chunk)."""
-    base = jax.random.PRNGKey(int(seed))
+    base = jax.random.PRNGKey(seed if isinstance(seed, jax.Array) else int(seed))    # traced inside a program
     return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.asarray(index, jnp.uint32))
 
 

@@ -55,12 +55,12 @@ import numpy as np
 from . import runtime
 from .xla import compiler_options
 
-__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT"]
+__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "memo"]
 
 #: the layout of a kept program's file (bumped when it changes)
 FORMAT = 1
 #: per-process counts of programs traced, loaded, compiled, ... (see the module docstring)
-COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0}
+COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0, "memo_hits": 0}
 _LOCK = threading.Lock()
 _ALL: "weakref.WeakSet[KeptProgram]" = weakref.WeakSet()
 
@@ -189,6 +189,45 @@ def _canon_tree(tree, depth=0) -> str:
     kind, aux = node
     return (f"{_canon(kind, depth + 1)}[{_canon(aux, depth + 1)}](" +
             ",".join(_canon_tree(c, depth + 1) for c in tree.children()) + ")")
+
+
+def memo(name: str, inputs, compute):
+    """``compute()`` once per ``inputs`` across processes: a small host result (a JSON value: a
+    number, a string, a list) kept beside the programs (:func:`program_dir`), keyed like a program
+    by the package source and the exact value of ``inputs`` (a tree of numbers, strings, arrays,
+    dataclasses, equinox modules).  For settings a data set derives from a few host solves
+    (:func:`bearingsim.datasets.program.run_settings`, 2.2 s of a warm 16-item run): a warm start
+    reads them.  Inputs it cannot describe exactly, or no cache folder: computed every time.
+    :data:`COUNTS` counts ``memo_hits``."""
+    import json
+
+    d = program_dir()
+    if d is None:
+        return compute()
+    try:
+        _OUTSIDE.flag = False
+        leaves, tree = jax.tree_util.tree_flatten(inputs)
+        desc = f"{name}|{_canon_tree(tree)}|{_canon(tuple(leaves))}"
+    except _Unkept:
+        return compute()
+    key = hashlib.sha256(f"{source_hash()}|{desc}".encode()).hexdigest()[:32]
+    path = d / f"{key}.memo.json"
+    try:
+        value = json.loads(path.read_text())["value"]
+        with _LOCK:
+            COUNTS["memo_hits"] += 1
+        return value
+    except (OSError, ValueError, KeyError):
+        pass
+    value = compute()
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        tmp.write_text(json.dumps({"name": name, "value": value}))
+        os.replace(tmp, path)
+    except (OSError, TypeError, ValueError):     # a read-only cache, a value JSON cannot hold
+        pass
+    return value
 
 
 class _Slot:

@@ -180,6 +180,7 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
 
     monkeypatch.setattr(dyn, "chunk_program", lambda *a, **kw: FakeProgram())
     monkeypatch.setattr(dsm.runner, "run_settings", lambda *a: 1)
+    monkeypatch.setitem(dsm.program.MICRO_BATCH, "cpu", 8)     # the 6 items in one micro-batch: slots 0-4 are items 0-4
     with pytest.raises(NotConvergedError, match="spec.toml: 4 of 6 items of the data set failed"):
         dataset_case(spec(), tmp_path / "f.h5")
     s = dataset_case(spec(), tmp_path / "f.h5", throw=False)

@@ -28,8 +28,9 @@ def spec20():
 
 @pytest.fixture(scope="module")
 def chunked(tmp_path_factory):
-    """The 20-item spec at chunk 16 (2 chunks) and chunk 64 (1 chunk of two micro-batches), the
-    second twice (reproducibility), counting the device-program calls."""
+    """The 20-item spec at chunk 16 (2 chunks: 16 and 4 items) and chunk 64 (1 chunk of all 20
+    items, five micro-batches of 4), the second twice (reproducibility), counting the
+    device-program calls."""
     d = tmp_path_factory.mktemp("engine")
     calls = []
     mp = pytest.MonkeyPatch()
@@ -49,11 +50,11 @@ def chunked(tmp_path_factory):
 
 
 def test_identical_bytes_across_chunk_sizes(chunked):
-    """Chunk 16 (two chunks) and chunk 64 (one chunk of the 20 items padded to two micro-batches of
-    16): the same bytes of signals, labels and transfer paths (every program runs on
+    """Chunk 16 (two chunks) and chunk 64 (one chunk of the 20 items, five micro-batches of 4,
+    run two at a time): the same bytes of signals, labels and transfer paths (every program runs on
     micro-batches of the platform's fixed width, dataset.micro_batch)."""
     d, out = chunked
-    assert out["c16"][0].chunk == 16 and out["c64"][0].chunk == 32 and out["c16"][0].failed == 0
+    assert out["c16"][0].chunk == 16 and out["c64"][0].chunk == 20 and out["c16"][0].failed == 0
     assert _bytes(d / "c16.h5") == _bytes(d / "c64.h5")
 
 
@@ -99,8 +100,8 @@ def test_a_chunk_is_one_device_program_call(chunked):
     whole micro-batches (no per-item call from the host)."""
     _, out = chunked
     W = dsm.micro_batch("cpu")
-    assert W == 16
-    assert out["c16"][1] == [16, 16] and out["c64"][1] == [32]
+    assert W == 4
+    assert out["c16"][1] == [16, 4] and out["c64"][1] == [20]
 
 
 def test_a_chunk_makes_no_host_round_trip(tmp_path):
@@ -165,7 +166,10 @@ def test_a_warm_process_loads_the_chunk_programs(tmp_path, monkeypatch):
     make_dataset(c, tmp_path / "warm.h5", progress=False)
     warm = programs.counts()
     assert warm["traced"] == cold["traced"], "a warm start traced a program again"
-    assert warm["loaded"] - cold["loaded"] == cold["traced"] - before["traced"]
+    # the chunk programs (states and Newton check, time loop, signal stage, label draws) loaded; the
+    # host solves of the substeps (run_settings) not even loaded: their result is read (programs.memo)
+    assert warm["loaded"] - cold["loaded"] >= 4
+    assert warm["memo_hits"] - cold["memo_hits"] == 1 and cold["memo_hits"] == before["memo_hits"]
     assert _bytes(tmp_path / "cold.h5") == _bytes(tmp_path / "warm.h5")
 
 
@@ -176,7 +180,7 @@ def test_a_rounded_chunk_says_so(chunked, tmp_path, monkeypatch):
     from bearingsim.errors import SettingWarning
     monkeypatch.setenv("BEARINGSIM_THREADS", "1")
     d, _ = chunked
-    with pytest.warns(SettingWarning, match="dataset.chunk 5 rounded up to 16 items"):
+    with pytest.warns(SettingWarning, match="dataset.chunk 5 rounded up to 8 items"):
         s = make_dataset(spec20(), tmp_path / "c5.h5", progress=False, chunk=5)
-    assert s.chunk == 16
+    assert s.chunk == 8
     assert _bytes(tmp_path / "c5.h5") == _bytes(d / "c16.h5")

@@ -129,3 +129,33 @@ def test_a_warm_process_loads_and_does_not_trace(tmp_path):
 def test_the_cache_can_be_switched_off(monkeypatch):
     monkeypatch.setenv("BEARINGSIM_PROGRAM_CACHE", "off")
     assert programs.program_dir() is None
+
+
+def test_memo_computes_once_per_exact_input_and_survives_a_bad_file(tmp_path, monkeypatch):
+    """programs.memo (the data set's substeps, run_settings): the second call with equal inputs
+    reads the kept value without computing; any other input value (a float's last bit, another
+    array, another equinox field) computes again; a damaged file is computed and replaced."""
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+    calls = []
+
+    def compute(v):
+        def f():
+            calls.append(v)
+            return v
+        return f
+
+    base = (Scale(jnp.asarray(2.0), "a"), 0.1, np.arange(3.0), ("outer", "ball"))
+    hits = programs.counts()["memo_hits"]
+    assert programs.memo("t", base, compute(1)) == 1
+    assert programs.memo("t", base, compute(2)) == 1            # read, not computed
+    assert programs.counts()["memo_hits"] == hits + 1 and calls == [1]
+    for other in ((Scale(jnp.asarray(2.0), "b"),) + base[1:], base[:1] + (np.nextafter(0.1, 1.0),) + base[2:],
+                  base[:2] + (np.arange(3.0) + 1e-12,) + base[3:], base[:3] + (("outer",),)):
+        assert programs.memo("t", other, compute(3)) == 3
+    assert programs.memo("u", base, compute(4)) == 4             # another name
+    assert calls == [1, 3, 3, 3, 3, 4]
+    for f in (tmp_path / "p").glob("*.memo.json"):
+        f.write_text("{not json")
+    assert programs.memo("t", base, compute(5)) == 5 and programs.memo("t", base, compute(6)) == 5
+    monkeypatch.setattr(programs, "program_dir", lambda: None)   # no cache folder: every call computes
+    assert programs.memo("t", base, compute(7)) == 7

@@ -1,7 +1,7 @@
 """The device program of a data set: one chunk of items in, its signals and simulated labels out.
 
 :func:`simulate_chunk` (plan, k) is the unit of work (in-process and on the Dask workers).  It
-pads chunk ``k`` to a multiple of the micro-batch width W (:func:`micro_batch`: cpu 16, gpu
+pads chunk ``k`` to a multiple of the micro-batch width W (:func:`micro_batch`: cpu 4, gpu
 up to 8192 by the device's memory) with its last item and calls :func:`device_program` once: per micro-batch of W items the
 chunk program of :func:`bearingsim.dynamics.chunk_program` (quasi-static states and the pits'
 effective depths, the Newton step count of the micro-batch from its menu, motion and the
@@ -69,7 +69,7 @@ class Physics:
 #: wide (the chunk is a loop over its micro-batches), so that an item's bytes do not depend on the
 #: chunk size or the worker count (XLA's kernels may round the last bits by batch width).  A GPU's
 #: entry is the widest W; :func:`micro_batch` narrows it to what the device's memory holds.
-MICRO_BATCH = {"cpu": 16, "gpu": 8192}
+MICRO_BATCH = {"cpu": 4, "gpu": 8192}
 #: W of a platform not in :data:`MICRO_BATCH`
 DEFAULT_MICRO_BATCH = 1024
 #: device memory per item and sample of a micro-batch's programs (states, accelerations, sensor,
@@ -81,8 +81,11 @@ GPU_MEMORY_SHARE = 0.25
 def micro_batch(platform, dev=None, samples=None, count=None) -> int:
     """The micro-batch width W of JAX platform ``platform`` ("cpu", "gpu", ...; None: JAX's default).
 
-    * cpu: 16 (a chunk of 16 items per core fills a CPU; 128 items of the four-class spec, no
-      tracing: W 16 3.4 s, W 64 5.9 s on 2 cores, 2026-11-25);
+    * cpu: 4 (the four-class spec, warm programs, in-process wall on 2 cores, 2026-11-28: 16
+      items W 16 6.9 s, W 8 5.9 s, W 4 3.9-4.1 s, W 2 5.0 s; 512 items W 16 ~30.5 s, W 8 27.6 s,
+      W 4 25.5-27.4 s, W 2 32.3 s; 128 items W 16 3.4 s, W 64 5.9 s on 2026-11-25: a narrow
+      micro-batch runs its Newton loops and its menu's step count for fewer items at once, and
+      two of them keep both cores busy even for 8 items);
     * gpu: the largest power of two up to 8192 whose items of ``samples`` samples fit in a
       quarter of the device's memory at :data:`GPU_BYTES_PER_SAMPLE` bytes per item and sample
       (8192 for 4800 samples on an 80 GB H100 or a 141 GB H200).  8192: measured on an H200
@@ -288,20 +291,32 @@ def run_settings(physics, lab, extent, depth, center, fs) -> int:
     """Substeps per sample for the whole data set: :func:`dynamics.batch_settings` on the extreme
     items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and least
     loaded, largest defect), the largest, fixed once so that no chunk recompiles.  (The Newton
-    step count is chosen per micro-batch inside the chunk program.)"""
+    step count is chosen per micro-batch inside the chunk program.)  The host solves are kept
+    across processes (:func:`bearingsim.programs.memo`, keyed by the physics and the extreme
+    items' values): a warm start of the same data set reads the number."""
+    from .. import programs
+
     ph = physics
     slots = slots_of(lab)
     loc = item_locations(lab)
     load = lab["radial_N"] + lab["axial_N"]
     size = np.asarray(extent, float) * np.asarray(depth, float)
-    check = dynamics.extreme_items(lab["fault_class"], lab["speed_rpm"], load, size)
-    subs = []
-    for i in check:
-        op = Operation.from_rpm(float(lab["speed_rpm"][i]), ph.control, True, True)
-        F = load_vector(axial=float(lab["axial_N"][i]), radial_x=float(lab["radial_N"][i]))
-        sp = tuple(Spall(float(center[i]) if L == loc[i] else 0.0, float(extent[i]) if L == loc[i] else 0.0,
-                         float(depth[i]) if L == loc[i] else 0.0, ph.profile, L, 0) for L in slots)
-        it, sub = dynamics.batch_settings(ph.bearing, op, F, sp, ph.cage_angle, fs, ph.params, ph.hertz_method)
-        if it is not None:
-            subs.append(sub)
-    return max(subs, default=1)
+    check = [int(i) for i in dynamics.extreme_items(lab["fault_class"], lab["speed_rpm"], load, size)]
+    items = tuple((float(lab["speed_rpm"][i]), float(lab["axial_N"][i]), float(lab["radial_N"][i]), str(loc[i]),
+                   float(center[i]), float(extent[i]), float(depth[i])) for i in check)
+
+    def compute():
+        subs = []
+        for rpm, axial, radial, li, c, e, d in items:
+            op = Operation.from_rpm(rpm, ph.control, True, True)
+            F = load_vector(axial=axial, radial_x=radial)
+            sp = tuple(Spall(c if L == li else 0.0, e if L == li else 0.0, d if L == li else 0.0, ph.profile, L, 0)
+                       for L in slots)
+            it, sub = dynamics.batch_settings(ph.bearing, op, F, sp, ph.cage_angle, fs, ph.params, ph.hertz_method)
+            if it is not None:
+                subs.append(int(sub))
+        return max(subs, default=1)
+
+    inputs = (ph.bearing, ph.params, ph.control, ph.hertz_method, ph.profile, float(ph.cage_angle), float(fs),
+              tuple(slots), items)
+    return int(programs.memo("run_settings", inputs, compute))

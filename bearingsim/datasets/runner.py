@@ -179,7 +179,7 @@ class ChunkPlan:
     pit: bool = False               # depth_rule "pit": the effective depths inside the chunk program
     unbridged: bool = False         # depth_rule "machined" with pass variability: the pits' unbridged fractions
                                     # from their healthy contacts, inside the chunk program
-    width: int = 16                 # micro-batch width W of every program call (program.micro_batch)
+    width: int = 4                  # micro-batch width W of every program call (program.micro_batch)
     device: str = None              # JAX platform ("cpu", "gpu"); None: the worker's default
     max_speed_rpm: float = None     # the spec's fastest speed: sizes the programs (None: the drawn items')
 

@@ -252,19 +252,24 @@ def _draw(sc, ds, start, n):
     import jax.numpy as jnp
     total = int(ds["count"])
     cls = class_of_index(ds, total)[start:start + n]
-    keys = item_keys(ds["seed"], n, start)
-    r = {k: (jnp.asarray(v) if isinstance(v, np.ndarray) else v) for k, v in _tables(sc, ds).items()}
+    r = _tables(sc, ds)             # host arrays: the program takes them as they are (no eager copies)
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
     with _cpu():
-        out = _draw_batch(jnp.asarray(keys), jnp.asarray(cls), r, flags)
+        out = _draw_batch(np.int64(int(ds["seed"])), np.arange(start, start + n, dtype=np.uint32), cls, r, flags)
+        keys = np.asarray(out.pop("key")).astype(np.uint32)
         return keys, cls, {k: np.asarray(v) for k, v in out.items()}
 
 
 @jit
-def _draw_batch(keys, cls, r, flags):
-    """Every item's label draws (one kept program per spec layout: :mod:`bearingsim.programs`)."""
+def _draw_batch(seed, index, cls, r, flags):
+    """Every item's key (:func:`bearingsim.keys.item_keys`) and label draws, in one kept program
+    per spec layout (:mod:`bearingsim.programs`: a warm start neither traces nor runs eager
+    one-op programs)."""
     import jax
-    return jax.vmap(lambda key, c: _draw_one(key, c, dict(r, **flags)))(keys, cls)
+    keys = jax_item_keys(seed, index)
+    out = jax.vmap(lambda key, c: _draw_one(key, c, dict(r, **flags)))(keys, cls)
+    out["key"] = keys
+    return out
 
 
 def draw_labels(case) -> np.ndarray:
