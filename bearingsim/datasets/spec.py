@@ -248,8 +248,6 @@ def _tables(sc, ds):
 
 
 def _draw(sc, ds, start, n):
-    import jax
-    import jax.numpy as jnp
     total = int(ds["count"])
     cls = class_of_index(ds, total)[start:start + n]
     r = _tables(sc, ds)             # host arrays: the program takes them as they are (no eager copies)
