@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, succeeded
-from .. import dynamics
+from .. import dynamics, programs
 from ..case.units import from_si, to_si
 from ..physics.defect import LOCATIONS, Spall
 from ..physics.jones import load_vector
@@ -294,8 +294,6 @@ def run_settings(physics, lab, extent, depth, center, fs) -> int:
     step count is chosen per micro-batch inside the chunk program.)  The host solves are kept
     across processes (:func:`bearingsim.programs.memo`, keyed by the physics and the extreme
     items' values): a warm start of the same data set reads the number."""
-    from .. import programs
-
     ph = physics
     slots = slots_of(lab)
     loc = item_locations(lab)
