@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
+
+from .programs import jit
 
 __all__ = ["STREAMS", "item_keys", "stream_key"]
 
@@ -33,11 +36,22 @@ STREAMS = {
 assert len(set(STREAMS.values())) == len(STREAMS), "stream numbers must be distinct"
 
 
+def _item_keys(seed, index):
+    base = jax.random.PRNGKey(seed)
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(index.astype(jnp.uint32))
+
+
+#: a kept program (bearingsim.programs): a host call loads it instead of tracing a vmap each time;
+#: inside another program it is inlined
+_item_keys_jit = jit(_item_keys)
+
+
 def item_keys(seed, index):
     """(N, 2) uint32 keys of the items ``index`` of a run seeded ``seed``:
     ``fold_in(PRNGKey(seed), i)`` (depends on (seed, index) only, not on the chunk)."""
-    base = jax.random.PRNGKey(seed if isinstance(seed, jax.Array) else int(seed))    # traced inside a program
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.asarray(index, jnp.uint32))
+    if isinstance(seed, jax.core.Tracer) or isinstance(index, jax.core.Tracer):
+        return _item_keys(jnp.asarray(seed), jnp.asarray(index))
+    return _item_keys_jit(np.int64(int(seed)), np.asarray(index, np.uint32))
 
 
 def stream_key(key, name):

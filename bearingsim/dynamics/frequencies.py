@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..physics.kinematics import DefectFrequencies, defect_frequencies
+from ..programs import jit
 
 __all__ = ["state_frequencies", "characteristic_frequencies", "spin_ratio"]
 
@@ -35,18 +36,39 @@ def state_frequencies(bearing, speed, sol):
 def characteristic_frequencies(bearing, op, sol):
     """:func:`state_frequencies` on the host: (:class:`DefectFrequencies`, mean loaded contact
     angle in rad), floats for one state, arrays for a batch (``sol`` and ``op.speed`` with a leading item axis)."""
-    speed = jnp.asarray(op.speed, jnp.float64)
-    Qi = jnp.asarray(sol.Q_inner)
-    if Qi.ndim == 1:
-        f, a_m, _ = state_frequencies(bearing, speed, sol)
+    Qi = np.shape(sol.Q_inner)
+    if len(Qi) == 1:
+        f, a_m = jax.device_get(_frequencies_jit(bearing, np.asarray(op.speed, np.float64), sol))
         return DefectFrequencies(*(float(v) for v in f)), float(a_m)
-    f, a_m, _ = jax.vmap(lambda w, s: state_frequencies(bearing, w, s))(jnp.broadcast_to(speed, Qi.shape[:1]), sol)
+    speed = np.broadcast_to(np.asarray(op.speed, np.float64), Qi[:1])
+    f, a_m = jax.device_get(_frequencies_batch_jit(bearing, speed, sol))
     return DefectFrequencies(*(np.asarray(v, float) for v in f)), np.asarray(a_m, float)
+
+
+def _frequencies(bearing, speed, sol):
+    f, a_m, _ = state_frequencies(bearing, speed, sol)
+    return f, a_m
+
+
+def _frequencies_batch(bearing, speed, sol):
+    return jax.vmap(lambda w, s: _frequencies(bearing, w, s))(speed, sol)
+
+
+#: kept programs (bearingsim.programs): a host call is one loaded program, not ~20 eager operations
+_frequencies_jit = jit(_frequencies)
+_frequencies_batch_jit = jit(_frequencies_batch)
+
+
+def _spin_ratio(bearing, contact_angle):
+    r = defect_frequencies(bearing, 1.0, contact_angle).bsf
+    return jnp.where(jnp.isfinite(r), r, 0.0)
+
+
+_spin_ratio_jit = jit(_spin_ratio)
 
 
 def spin_ratio(bearing, contact_angle):
     """omega_R / omega: a ball's spin speed relative to the cage per unit shaft speed (2 pi BSF
     / omega, docs/model.md section 8) at the mean loaded contact angle (rad; a float or an array)."""
-    r = np.asarray(defect_frequencies(bearing, 1.0, jnp.asarray(contact_angle, jnp.float64)).bsf, float)
-    r = np.where(np.isfinite(r), r, 0.0)
+    r = np.asarray(_spin_ratio_jit(bearing, np.asarray(contact_angle, np.float64)), float)
     return float(r) if r.ndim == 0 else r

@@ -211,7 +211,7 @@ def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, 
     a chord step misses its tolerance)."""
     h = 1.0 / (substeps * fs)
     f, z, g = model.params.modes()
-    flt = sensor_mod.sensor_filter(f, z, g, h)
+    flt = sensor_mod.host_sensor_filter(f, z, g, h)
     record = rec0 is not None
     chord = ball_solver == "chord" and scheme == "newmark"
     carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ()) + (

@@ -38,7 +38,7 @@ from jax import lax
 
 from ..programs import jit
 
-__all__ = ["SensorFilter", "sensor_filter", "filter_init", "filter_update", "filter_output", "step_response",
+__all__ = ["SensorFilter", "sensor_filter", "host_sensor_filter", "host_measurement_noise", "filter_init", "filter_update", "filter_output", "step_response",
            "run_filter", "apply_sensor", "apply_sensor_batch", "measurement_noise", "G"]
 
 #: standard gravity (m/s^2), for noise levels given in g
@@ -127,6 +127,17 @@ def run_filter(flt: SensorFilter, u):
 
 _run_filter_jit = jit(run_filter)
 _run_filter_batch_jit = jit(jax.vmap(run_filter))
+_sensor_filter_jit = jit(sensor_filter)
+
+
+def host_sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:
+    """:func:`sensor_filter` of host values as one kept program (:mod:`bearingsim.programs`; the
+    step ``h`` an argument, not a constant): a simulation's set-up loads it instead of running
+    ~25 operations one by one."""
+    f = np.atleast_1d(np.asarray(frequencies, np.float64))
+    z = np.broadcast_to(np.asarray(damping_ratios, np.float64), f.shape)
+    g = np.broadcast_to(np.asarray(gains, np.float64), f.shape)
+    return _sensor_filter_jit(f, z, g, np.float64(h))
 
 
 def apply_sensor(housing_acceleration, h, frequencies, damping_ratios, gains=1.0):
@@ -135,20 +146,18 @@ def apply_sensor(housing_acceleration, h, frequencies, damping_ratios, gains=1.0
     and mode count); for signals outside a simulation (e.g. a different sensor
     path on a stored run, or a record varied pass by pass: the step is then the sample
     interval, the input linear between samples)."""
-    u = jnp.asarray(housing_acceleration, jnp.float64)
-    return _run_filter_jit(sensor_filter(frequencies, damping_ratios, gains, h), u)
+    return _run_filter_jit(host_sensor_filter(frequencies, damping_ratios, gains, h),
+                           np.asarray(housing_acceleration, np.float64))
 
 
 def apply_sensor_batch(housing_acceleration, h, frequencies, damping_ratios, gains=1.0):
     """:func:`apply_sensor` for N records at once: ``housing_acceleration`` (N, T), the modes
     (M,) for all or (N, M) per record (one program for the batch)."""
-    u = jnp.asarray(housing_acceleration, jnp.float64)
+    u = np.asarray(housing_acceleration, np.float64)
     n = u.shape[0]
-    f = jnp.atleast_1d(jnp.asarray(frequencies, jnp.float64))
-    f = jnp.broadcast_to(f, (n,) + f.shape[-1:])
-    z = jnp.broadcast_to(jnp.asarray(damping_ratios, jnp.float64), f.shape)
-    g = jnp.broadcast_to(jnp.asarray(gains, jnp.float64), f.shape)
-    return _run_filter_batch_jit(sensor_filter(f, z, g, h), u)
+    f = np.atleast_1d(np.asarray(frequencies, np.float64))
+    f = np.broadcast_to(f, (n,) + f.shape[-1:])
+    return _run_filter_batch_jit(host_sensor_filter(f, damping_ratios, gains, h), u)
 
 
 def measurement_noise(key, n, rms, fs=None, band=None):
@@ -164,3 +173,18 @@ def measurement_noise(key, n, rms, fs=None, band=None):
         x = jnp.fft.irfft(jnp.where((f < lo) | (f > hi), 0.0, X), int(n))
     s = jnp.sqrt(jnp.mean(x * x))
     return jnp.where(s > 0, x * (rms / jnp.where(s > 0, s, 1.0)), 0.0)
+
+
+def _noise(key, rms, n, fs, band):
+    return measurement_noise(key, n, rms, fs, band)
+
+
+_noise_jit = jit(_noise)
+
+
+def host_measurement_noise(key, n, rms, fs=None, band=None):
+    """:func:`measurement_noise` as one kept program (:mod:`bearingsim.programs`; ``rms`` an
+    argument, ``n``, ``fs`` and ``band`` its static settings): a simulation's noise without ~10
+    operations run one by one."""
+    return _noise_jit(key, np.float64(rms), int(n), None if fs is None else float(fs),
+                      None if band is None else tuple(float(b) for b in band))

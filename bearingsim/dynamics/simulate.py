@@ -21,7 +21,7 @@ from ..physics.hertz import stiffness_curve
 from ..physics.jones import result_hint, solve
 from ..physics.kinematics import DefectFrequencies, Operation
 from .passes import PassSettings, pass_variability
-from .sensor import measurement_noise
+from .sensor import host_measurement_noise
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
@@ -109,7 +109,7 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
                       pass_shifts=np.asarray(shifts)[:n + 1])
     noise = np.zeros(T)
     if realism.noise_rms > 0.0:
-        noise = np.asarray(measurement_noise(stream_key(jnp.asarray(key, jnp.uint32), "noise"), T, realism.noise_rms, fs,
+        noise = np.asarray(host_measurement_noise(stream_key(jnp.asarray(key, jnp.uint32), "noise"), T, realism.noise_rms, fs,
                                              realism.noise_band), float)
     return out, noise, labels
 
