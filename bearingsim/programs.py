@@ -36,6 +36,7 @@ warm process loads and does not trace).
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import enum
 import functools
@@ -55,12 +56,13 @@ import numpy as np
 from . import runtime
 from .xla import compiler_options
 
-__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "memo"]
+__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "memo", "prefetching"]
 
 #: the layout of a kept program's file (bumped when it changes)
 FORMAT = 1
 #: per-process counts of programs traced, loaded, compiled, ... (see the module docstring)
-COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0, "memo_hits": 0}
+COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0, "memo_hits": 0,
+          "prefetched": 0}
 _LOCK = threading.Lock()
 _ALL: "weakref.WeakSet[KeptProgram]" = weakref.WeakSet()
 
@@ -311,6 +313,10 @@ class KeptProgram:
         elif prog is not False:
             with _LOCK:
                 COUNTS["memory"] += 1
+        if _RECORDING and disk and prog is not False:
+            with _LOCK:
+                for rec in _RECORDING:
+                    rec.setdefault((self._name, key), None)
         if prog is False:                               # jax.export refused it: an ordinary program
             return self._jit(*args, **kwargs)
         call, template = prog
@@ -391,6 +397,39 @@ class KeptProgram:
                 pass            # a read-only cache: kept in memory for this process
         return self._callable(exp, dev), holder["template"]
 
+    def _prefetch(self, key, dev):
+        """Load the kept program ``key`` and compile it for ``dev`` (from the compilation cache)
+        ahead of its first call (:func:`prefetching`); nothing when it is already here or its
+        file is missing or unreadable (the call then loads or traces it as usual)."""
+        mem = (key, dev.id)
+        d = program_dir()
+        if d is None or mem in self._programs:
+            return
+        with self._lock:
+            if mem in self._programs:
+                return
+            try:
+                blob = pickle.loads((d / f"{key}.jaxprog").read_bytes())
+                if blob.get("format") != FORMAT:
+                    return
+                exp = jax.export.deserialize(bytearray(blob["exported"]))
+                on = jax.sharding.SingleDeviceSharding(dev)
+                specs = [jax.ShapeDtypeStruct(a.shape, a.dtype, sharding=on) for a in exp.in_avals]
+                jitted = self._callable(exp, dev)
+                compiled = jitted.lower(*specs).compile()
+            except Exception:           # noqa: BLE001 - the call loads or traces it itself
+                return
+
+            def call(*a):
+                try:
+                    return compiled(*a)
+                except TypeError:       # an argument's weak type: the jitted program (compiles it again)
+                    return jitted(*a)
+            with _LOCK:
+                COUNTS["loaded"] += 1
+                COUNTS["prefetched"] += 1
+            self._programs[mem] = (call, blob["template"])
+
     def _callable(self, exp, dev):
         def call(*a):
             return exp.call(*a)
@@ -406,6 +445,62 @@ class KeptProgram:
     def lower(self, *args, **kwargs):
         """The ordinary (unkept) lowering of ``fun`` for these arguments."""
         return eqx.filter_jit(self._fun, compiler_options=compiler_options() or None).lower(*args, **kwargs)
+
+
+#: the sets of (kept program name, key) that the active :func:`prefetching` blocks record
+_RECORDING: list = []
+
+
+@contextlib.contextmanager
+def prefetching(name: str, device=None):
+    """Load and compile, in background threads, the kept programs that the last run under
+    ``name`` used, while this run does its other work (imports done: drawing labels, host
+    solves) -- XLA releases the GIL while it deserializes an executable, so on two cores the
+    three programs of a data set chunk load in ~1.6 s instead of ~2.2 s, and beside the label
+    draws.  Records the programs this run uses (a small JSON file beside the programs, written
+    atomically) for the next run.  A program not prefetched is loaded or traced by its first
+    call as usual; the threads are joined on exit."""
+    d = program_dir()
+    if d is None:
+        yield
+        return
+    import json
+
+    dev = jax.devices()[0] if device is None else device
+    path = d / f"{hashlib.sha256(f'{source_hash()}|{name}|{dev.platform}'.encode()).hexdigest()[:32]}.prefetch.json"
+    try:
+        recorded = [tuple(e) for e in json.loads(path.read_text())]
+    except (OSError, ValueError, TypeError):
+        recorded = []
+    by_name = {p._name: p for p in list(_ALL)}
+    todo = [(by_name[n], k) for n, k in recorded if n in by_name]
+    def load(part):
+        for p, k in part:
+            p._prefetch(k, dev)
+
+    # two loaders, in the order the last run first used the programs (0, 2, ... and 1, 3, ...)
+    threads = [threading.Thread(target=load, args=(todo[i::2],), daemon=True, name="bearingsim-prefetch")
+               for i in range(min(2, len(todo)))]
+    for t in threads:
+        t.start()
+    mine: dict = {}             # (name, key) in the order of first use
+    with _LOCK:
+        _RECORDING.append(mine)
+    try:
+        yield
+    finally:
+        with _LOCK:
+            _RECORDING.remove(mine)
+        for t in threads:
+            t.join()
+        if mine and list(mine) != recorded:
+            try:
+                d.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+                tmp.write_text(json.dumps(list(mine)))
+                os.replace(tmp, path)
+            except OSError:
+                pass
 
 
 def jit(fun=None, *, name=None):

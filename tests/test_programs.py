@@ -159,3 +159,30 @@ def test_memo_computes_once_per_exact_input_and_survives_a_bad_file(tmp_path, mo
     assert programs.memo("t", base, compute(5)) == 5 and programs.memo("t", base, compute(6)) == 5
     monkeypatch.setattr(programs, "program_dir", lambda: None)   # no cache folder: every call computes
     assert programs.memo("t", base, compute(7)) == 7
+
+
+def test_prefetching_loads_what_the_last_run_used_before_it_is_called(tmp_path, monkeypatch):
+    """programs.prefetching (a data set's chunk programs load in background threads while its
+    labels are drawn): a run records the kept programs it used; the next run under the same name
+    loads and compiles them before their first call, which then neither loads nor traces, with
+    the same result."""
+    from bearingsim.keys import item_keys
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+    programs.forget()
+    with programs.prefetching("t"):
+        first = np.asarray(item_keys(3, [0, 1, 5]))
+    assert len(list((tmp_path / "p").glob("*.prefetch.json"))) == 1
+    programs.forget()
+    before = programs.counts()
+    with programs.prefetching("t"):
+        pass                                    # the threads are joined on exit
+    mid = programs.counts()
+    assert mid["prefetched"] - before["prefetched"] == 1 and mid["traced"] == before["traced"]
+    again = np.asarray(item_keys(3, [0, 1, 5]))
+    after = programs.counts()
+    assert after["loaded"] == mid["loaded"] and after["traced"] == mid["traced"]
+    assert after["memory"] == mid["memory"] + 1
+    np.testing.assert_array_equal(again, first)
+    with programs.prefetching("another name"):  # nothing recorded under it: nothing loaded
+        pass
+    assert programs.counts()["prefetched"] == after["prefetched"]

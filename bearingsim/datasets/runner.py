@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import programs
 from ..case import Scenario, as_scenario, check_sampling
 from ..errors import BearingsimError, failed, InputError, SettingWarning
 from ..signals.background import Background
@@ -222,8 +223,13 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     False nothing; a callable receives every :class:`~bearingsim.datasets.progress.ProgressEvent`."""
     show = Display("dataset") if progress is True else progress if callable(progress) else None
     try:
-        return _make_dataset(as_scenario(case), path, RunProgress(show if show is not None else lambda e: None), runner,
-                             device=device, chunk=chunk, compression=compression, max_speed_rpm=max_speed_rpm)
+        sc = as_scenario(case)
+        # the chunk programs the last run of this spec used load in the background meanwhile
+        ahead = (programs.prefetching(f"dataset|{sc.text}", resolve_device(device)) if runner is None
+                 else contextlib.nullcontext())
+        with ahead:
+            return _make_dataset(sc, path, RunProgress(show if show is not None else lambda e: None), runner,
+                                 device=device, chunk=chunk, compression=compression, max_speed_rpm=max_speed_rpm)
     finally:
         if isinstance(show, Display):
             show.close()
