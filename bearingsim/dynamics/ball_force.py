@@ -78,9 +78,9 @@ def _newton(bearing, op, curve, q, psi, H_outer, H_inner, iterations, record, ja
     def state(X1, X2):
         return ball_state(bearing, op, (X1, X2), A1, A2, curve, Ho, Hi, ws)
 
-    def f(X1, X2):
-        st = state(X1, X2)
-        return (st.r_axial, st.r_radial), (st.ball_G, st.ball_H)
+    def f(X1, X2):          # ball_state's residuals and loads, both contacts as one stacked array
+        r1, r2, G_, H_, _ = ball_balance(bearing, op, (X1, X2), A1, A2, curve, Ho, Hi, ws)
+        return (r1, r2), (G_, H_)
 
     one, zero = jnp.ones_like(X1), jnp.zeros_like(X1)
     cap = 2e-3 * bearing.ball_diameter
