@@ -36,7 +36,6 @@ warm process loads and does not trace).
 """
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import enum
 import functools
@@ -56,7 +55,8 @@ import numpy as np
 from . import runtime
 from .xla import compiler_options
 
-__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "memo", "prefetching"]
+__all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "record", "kept_programs",
+           "count", "Undescribable", "describe"]
 
 #: the layout of a kept program's file (bumped when it changes)
 FORMAT = 1
@@ -191,45 +191,6 @@ def _canon_tree(tree, depth=0) -> str:
     kind, aux = node
     return (f"{_canon(kind, depth + 1)}[{_canon(aux, depth + 1)}](" +
             ",".join(_canon_tree(c, depth + 1) for c in tree.children()) + ")")
-
-
-def memo(name: str, inputs, compute):
-    """``compute()`` once per ``inputs`` across processes: a small host result (a JSON value: a
-    number, a string, a list) kept beside the programs (:func:`program_dir`), keyed like a program
-    by the package source and the exact value of ``inputs`` (a tree of numbers, strings, arrays,
-    dataclasses, equinox modules).  For settings a data set derives from a few host solves
-    (:func:`bearingsim.datasets.program.run_settings`, 2.2 s of a warm 16-item run): a warm start
-    reads them.  Inputs it cannot describe exactly, or no cache folder: computed every time.
-    :data:`COUNTS` counts ``memo_hits``."""
-    import json
-
-    d = program_dir()
-    if d is None:
-        return compute()
-    try:
-        _OUTSIDE.flag = False
-        leaves, tree = jax.tree_util.tree_flatten(inputs)
-        desc = f"{name}|{_canon_tree(tree)}|{_canon(tuple(leaves))}"
-    except _Unkept:
-        return compute()
-    key = hashlib.sha256(f"{source_hash()}|{desc}".encode()).hexdigest()[:32]
-    path = d / f"{key}.memo.json"
-    try:
-        value = json.loads(path.read_text())["value"]
-        with _LOCK:
-            COUNTS["memo_hits"] += 1
-        return value
-    except (OSError, ValueError, KeyError):
-        pass
-    value = compute()
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_text(json.dumps({"name": name, "value": value}))
-        os.replace(tmp, path)
-    except (OSError, TypeError, ValueError):     # a read-only cache, a value JSON cannot hold
-        pass
-    return value
 
 
 class _Slot:
@@ -397,12 +358,14 @@ class KeptProgram:
                 pass            # a read-only cache: kept in memory for this process
         return self._callable(exp, dev), holder["template"]
 
-    def _prefetch(self, key, dev):
-        """Load the kept program ``key`` and compile it for ``dev`` (from the compilation cache)
-        ahead of its first call (:func:`prefetching`); nothing when it is already here or its
-        file is missing or unreadable (the call then loads or traces it as usual)."""
-        mem = (key, dev.id)
-        d = program_dir()
+    @property
+    def name(self) -> str:
+        return self._name
+
+    def prefetch(self, key, dev):
+        """Load the kept program ``key`` and compile it for ``dev`` ahead of its first call
+        (:func:`bearingsim.warm.prefetching`; a missing or unreadable file: nothing)."""
+        mem, d = (key, dev.id), program_dir()
         if d is None or mem in self._programs:
             return
         with self._lock:
@@ -447,60 +410,35 @@ class KeptProgram:
         return eqx.filter_jit(self._fun, compiler_options=compiler_options() or None).lower(*args, **kwargs)
 
 
-#: the sets of (kept program name, key) that the active :func:`prefetching` blocks record
+#: the dicts of (kept program name, key) that the active :func:`record` calls fill
 _RECORDING: list = []
 
 
-@contextlib.contextmanager
-def prefetching(name: str, device=None):
-    """Load and compile, in background threads, the kept programs that the last run under
-    ``name`` used, while this run does its other work (imports done: drawing labels, host
-    solves) -- XLA releases the GIL while it deserializes an executable, so on two cores the
-    three programs of a data set chunk load in ~1.6 s instead of ~2.2 s, and beside the label
-    draws.  Records the programs this run uses (a small JSON file beside the programs, written
-    atomically) for the next run.  A program not prefetched is loaded or traced by its first
-    call as usual; the threads are joined on exit."""
-    d = program_dir()
-    if d is None:
-        yield
-        return
-    import json
-
-    dev = jax.devices()[0] if device is None else device
-    path = d / f"{hashlib.sha256(f'{source_hash()}|{name}|{dev.platform}'.encode()).hexdigest()[:32]}.prefetch.json"
-    try:
-        recorded = [tuple(e) for e in json.loads(path.read_text())]
-    except (OSError, ValueError, TypeError):
-        recorded = []
-    by_name = {p._name: p for p in list(_ALL)}
-    todo = [(by_name[n], k) for n, k in recorded if n in by_name]
-    def load(part):
-        for p, k in part:
-            p._prefetch(k, dev)
-
-    # two loaders, in the order the last run first used the programs (0, 2, ... and 1, 3, ...)
-    threads = [threading.Thread(target=load, args=(todo[i::2],), daemon=True, name="bearingsim-prefetch")
-               for i in range(min(2, len(todo)))]
-    for t in threads:
-        t.start()
-    mine: dict = {}             # (name, key) in the order of first use
+def record(into: dict, on: bool = True) -> None:
+    """Record in ``into`` (a dict, in order of first use) the (name, key) of every kept program
+    called from now on (``on`` False: stop; :func:`bearingsim.warm.prefetching`)."""
     with _LOCK:
-        _RECORDING.append(mine)
-    try:
-        yield
-    finally:
-        with _LOCK:
-            _RECORDING.remove(mine)
-        for t in threads:
-            t.join()
-        if mine and list(mine) != recorded:
-            try:
-                d.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-                tmp.write_text(json.dumps(list(mine)))
-                os.replace(tmp, path)
-            except OSError:
-                pass
+        _RECORDING.append(into) if on else _RECORDING.remove(into)
+
+
+def kept_programs() -> dict:
+    """Every :class:`KeptProgram` of this process by its name."""
+    return {p.name: p for p in list(_ALL)}
+
+
+def count(what: str) -> None:
+    """Add one to :data:`COUNTS` ``what`` (thread-safe)."""
+    with _LOCK:
+        COUNTS[what] = COUNTS.get(what, 0) + 1
+
+
+Undescribable = _Unkept        # a value describe() cannot describe exactly
+
+
+def describe(value) -> str:
+    """The exact text of a static value or tree structure that program keys use (raises
+    :class:`Undescribable`)."""
+    return _canon(value)
 
 
 def jit(fun=None, *, name=None):

@@ -167,7 +167,7 @@ def test_a_warm_process_loads_the_chunk_programs(tmp_path, monkeypatch):
     warm = programs.counts()
     assert warm["traced"] == cold["traced"], "a warm start traced a program again"
     # the chunk programs (states and Newton check, time loop, signal stage, label draws) loaded; the
-    # host solves of the substeps (run_settings) not even loaded: their result is read (programs.memo)
+    # host solves of the substeps (run_settings) not even loaded: their result is read (warm.memo)
     assert warm["loaded"] - cold["loaded"] >= 4
     assert warm["memo_hits"] - cold["memo_hits"] == 1 and cold["memo_hits"] == before["memo_hits"]
     assert _bytes(tmp_path / "cold.h5") == _bytes(tmp_path / "warm.h5")

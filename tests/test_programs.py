@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim import programs
+from bearingsim import programs, warm
 from bearingsim.programs import jit
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -132,7 +132,7 @@ def test_the_cache_can_be_switched_off(monkeypatch):
 
 
 def test_memo_computes_once_per_exact_input_and_survives_a_bad_file(tmp_path, monkeypatch):
-    """programs.memo (the data set's substeps, run_settings): the second call with equal inputs
+    """warm.memo (the data set's substeps, run_settings): the second call with equal inputs
     reads the kept value without computing; any other input value (a float's last bit, another
     array, another equinox field) computes again; a damaged file is computed and replaced."""
     monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
@@ -146,35 +146,35 @@ def test_memo_computes_once_per_exact_input_and_survives_a_bad_file(tmp_path, mo
 
     base = (Scale(jnp.asarray(2.0), "a"), 0.1, np.arange(3.0), ("outer", "ball"))
     hits = programs.counts()["memo_hits"]
-    assert programs.memo("t", base, compute(1)) == 1
-    assert programs.memo("t", base, compute(2)) == 1            # read, not computed
+    assert warm.memo("t", base, compute(1)) == 1
+    assert warm.memo("t", base, compute(2)) == 1            # read, not computed
     assert programs.counts()["memo_hits"] == hits + 1 and calls == [1]
     for other in ((Scale(jnp.asarray(2.0), "b"),) + base[1:], base[:1] + (np.nextafter(0.1, 1.0),) + base[2:],
                   base[:2] + (np.arange(3.0) + 1e-12,) + base[3:], base[:3] + (("outer",),)):
-        assert programs.memo("t", other, compute(3)) == 3
-    assert programs.memo("u", base, compute(4)) == 4             # another name
+        assert warm.memo("t", other, compute(3)) == 3
+    assert warm.memo("u", base, compute(4)) == 4             # another name
     assert calls == [1, 3, 3, 3, 3, 4]
     for f in (tmp_path / "p").glob("*.memo.json"):
         f.write_text("{not json")
-    assert programs.memo("t", base, compute(5)) == 5 and programs.memo("t", base, compute(6)) == 5
+    assert warm.memo("t", base, compute(5)) == 5 and warm.memo("t", base, compute(6)) == 5
     monkeypatch.setattr(programs, "program_dir", lambda: None)   # no cache folder: every call computes
-    assert programs.memo("t", base, compute(7)) == 7
+    assert warm.memo("t", base, compute(7)) == 7
 
 
 def test_prefetching_loads_what_the_last_run_used_before_it_is_called(tmp_path, monkeypatch):
-    """programs.prefetching (a data set's chunk programs load in background threads while its
+    """warm.prefetching (a data set's chunk programs load in background threads while its
     labels are drawn): a run records the kept programs it used; the next run under the same name
     loads and compiles them before their first call, which then neither loads nor traces, with
     the same result."""
     from bearingsim.keys import item_keys
     monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
     programs.forget()
-    with programs.prefetching("t"):
+    with warm.prefetching("t"):
         first = np.asarray(item_keys(3, [0, 1, 5]))
     assert len(list((tmp_path / "p").glob("*.prefetch.json"))) == 1
     programs.forget()
     before = programs.counts()
-    with programs.prefetching("t"):
+    with warm.prefetching("t"):
         pass                                    # the threads are joined on exit
     mid = programs.counts()
     assert mid["prefetched"] - before["prefetched"] == 1 and mid["traced"] == before["traced"]
@@ -183,6 +183,6 @@ def test_prefetching_loads_what_the_last_run_used_before_it_is_called(tmp_path, 
     assert after["loaded"] == mid["loaded"] and after["traced"] == mid["traced"]
     assert after["memory"] == mid["memory"] + 1
     np.testing.assert_array_equal(again, first)
-    with programs.prefetching("another name"):  # nothing recorded under it: nothing loaded
+    with warm.prefetching("another name"):  # nothing recorded under it: nothing loaded
         pass
     assert programs.counts()["prefetched"] == after["prefetched"]

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, succeeded
-from .. import dynamics, programs
+from .. import dynamics, warm
 from ..case.units import from_si, to_si
 from ..physics.defect import LOCATIONS, Spall
 from ..physics.jones import load_vector
@@ -292,7 +292,7 @@ def run_settings(physics, lab, extent, depth, center, fs) -> int:
     items of every class (:func:`dynamics.extreme_items`: fastest, slowest, most and least
     loaded, largest defect), the largest, fixed once so that no chunk recompiles.  (The Newton
     step count is chosen per micro-batch inside the chunk program.)  The host solves are kept
-    across processes (:func:`bearingsim.programs.memo`, keyed by the physics and the extreme
+    across processes (:func:`bearingsim.warm.memo`, keyed by the physics and the extreme
     items' values): a warm start of the same data set reads the number."""
     ph = physics
     slots = slots_of(lab)
@@ -317,4 +317,4 @@ def run_settings(physics, lab, extent, depth, center, fs) -> int:
 
     inputs = (ph.bearing, ph.params, ph.control, ph.hertz_method, ph.profile, float(ph.cage_angle), float(fs),
               tuple(slots), items)
-    return int(programs.memo("run_settings", inputs, compute))
+    return int(warm.memo("run_settings", inputs, compute))

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import programs
+from .. import warm
 from ..case import Scenario, as_scenario, check_sampling
 from ..errors import BearingsimError, failed, InputError, SettingWarning
 from ..signals.background import Background
@@ -225,7 +225,7 @@ def make_dataset(case, path, progress=True, runner=None, *, device=None, chunk=N
     try:
         sc = as_scenario(case)
         # the chunk programs the last run of this spec used load in the background meanwhile
-        ahead = (programs.prefetching(f"dataset|{sc.text}", resolve_device(device)) if runner is None
+        ahead = (warm.prefetching(f"dataset|{sc.text}", resolve_device(device)) if runner is None
                  else contextlib.nullcontext())
         with ahead:
             return _make_dataset(sc, path, RunProgress(show if show is not None else lambda e: None), runner,
