@@ -73,6 +73,7 @@ def prefetching(name: str, device=None):
         recorded = []
     by_name = programs.kept_programs()
     todo = [(by_name[n], k) for n, k in recorded if n in by_name]
+
     def load(part):
         for p, k in part:
             p.prefetch(k, dev)
