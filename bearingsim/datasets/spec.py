@@ -247,15 +247,24 @@ def _tables(sc, ds):
     return r
 
 
+#: the label draw runs on a power of two of items, at least this many (the rest discarded): one
+#: program serves every count up to it, and each count above shares one with its neighbours (a new
+#: count traced and compiled its own program: ~5 s on 2 cores, the suite's many small counts)
+DRAW_BUCKET = 64
+
+
 def _draw(sc, ds, start, n):
     total = int(ds["count"])
     cls = class_of_index(ds, total)[start:start + n]
     r = _tables(sc, ds)             # host arrays: the program takes them as they are (no eager copies)
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
+    width = max(DRAW_BUCKET, 1 << max(n - 1, 0).bit_length())
+    padded = np.concatenate([cls, np.zeros(width - n, cls.dtype)])     # every item's draws are its own
     with _cpu():
-        out = _draw_batch(np.int64(int(ds["seed"])), np.arange(start, start + n, dtype=np.uint32), cls, r, flags)
-        keys = np.asarray(out.pop("key")).astype(np.uint32)
-        return keys, cls, {k: np.asarray(v) for k, v in out.items()}
+        out = _draw_batch(np.int64(int(ds["seed"])), np.arange(start, start + width, dtype=np.uint32), padded, r,
+                          flags)
+        keys = np.asarray(out.pop("key"))[:n].astype(np.uint32)
+        return keys, cls, {k: np.asarray(v)[:n] for k, v in out.items()}
 
 
 @jit
