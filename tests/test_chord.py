@@ -113,6 +113,22 @@ def test_ball_balance_is_ball_state():
         assert float(jnp.max(jnp.abs(got - want))) <= 1e-13 * scale
     for k, a in ((2, st.alpha_inner), (4, st.alpha_outer)):
         assert float(jnp.max(jnp.abs(jnp.arctan2(rec[k], rec[k + 1]) - a))) <= 1e-14
+    # the dynamics' Newton step differentiates ball_balance (issue 32): its Jacobian is ball_state's,
+    # and both are the central difference of the residuals (an independent check, step 1e-10 m)
+    one, zero = jnp.ones(9), jnp.zeros(9)
+    bal = lambda x1, x2: balls.ball_balance(b, op, (x1, x2), A1, A2, curve, Ho, 0.0 * Ho, ws)[:4]  # noqa: E731
+    sta = lambda x1, x2: (lambda s: (s.r_axial, s.r_radial, s.ball_G, s.ball_H))(  # noqa: E731
+        balls.ball_state(b, op, (x1, x2), A1, A2, curve, Ho, 0.0 * Ho, ws))
+    jscale = scale / 1e-6                               # N per um of ball travel
+    for t in ((one, zero), (zero, one)):
+        _, d_bal = jax.jvp(bal, (X[0], X[1]), t)
+        _, d_sta = jax.jvp(sta, (X[0], X[1]), t)
+        e = 1e-10
+        fd = [(p - m) / (2 * e) for p, m in zip(bal(X[0] + e * t[0], X[1] + e * t[1]),
+                                                bal(X[0] - e * t[0], X[1] - e * t[1]))]
+        for got, want, num in zip(d_bal, d_sta, fd):
+            assert float(jnp.max(jnp.abs(got - want))) <= 1e-12 * jscale
+            assert float(jnp.max(jnp.abs(got - num))) <= 1e-4 * jscale
 
 
 def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
