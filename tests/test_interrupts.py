@@ -97,3 +97,23 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path, moment):
     assert rc == 130, err
     assert len(err.strip().splitlines()) == 1 and "SIGINT" in err and "Traceback" not in err, err
     assert _clean(tmp_path) == []                # no file, no temporary, no .partial
+
+
+def test_ctrl_c_while_a_library_loads_raises_nothing_through_its_initialisation(tmp_path):
+    """A KeyboardInterrupt raised inside a native extension's initialisation (jaxlib's, while the
+    command's lazy imports run) ended the process with std::terminate (exit -6 or -11, seen in CI
+    once in ~15 tries of the 'loading' case above).  A Ctrl-C that arrives during an import ends
+    the run there: one line, exit 130, nothing after it runs.  Deterministic: the imported
+    module sends the signal to its own process while it loads."""
+    (tmp_path / "loads_slowly.py").write_text(
+        "import os, signal, time\nos.kill(os.getpid(), signal.SIGINT)\ntime.sleep(20)\n"
+        "print('the import went on after the Ctrl-C')\n")
+    code = (f"import sys; sys.path.insert(0, {str(tmp_path)!r})\n"
+            "from bearingsim.app import commands, cli\n"
+            "def loads(args):\n    import loads_slowly\n"
+            "commands.cmd_info = loads\n"
+            "code = cli.main(['info', 'demo'])\nprint('main returned', code)\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert p.returncode == 130, p.stderr
+    assert p.stdout == "", p.stdout
+    assert len(p.stderr.strip().splitlines()) == 1 and "SIGINT" in p.stderr and "Traceback" not in p.stderr, p.stderr

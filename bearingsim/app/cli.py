@@ -208,8 +208,20 @@ def _hard_stop():
     os._exit(130)
 
 
+def _importing(frame):
+    """Whether the interrupted code is inside an import: a KeyboardInterrupt raised there can
+    escape a native extension's initialisation (jaxlib's: ``std::terminate``, exit -6 / -11)."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _stop(signum, frame):
     _stopped_by.append(signal.Signals(signum).name)
+    if _importing(frame):       # while a library loads: clean up and exit now, raise nothing
+        _hard_stop()
     if not _watchdog:
         t = threading.Timer(HARD_STOP_S, _hard_stop)
         t.daemon = True
