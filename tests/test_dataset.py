@@ -638,3 +638,30 @@ def test_a_fault_that_makes_no_impact_is_excluded_not_rescaled(tmp_path, capsys)
     cap = capsys.readouterr()
     assert f"{s.excluded} of 8 fault items excluded: the fault makes no impact" in cap.out
     assert "all other items simulated successfully" in cap.out and "failed" not in cap.err
+
+
+def test_a_cached_data_set_is_simulated_once_per_spec(files, tmp_path, monkeypatch, capsys):
+    """bearingsim.datasets.cached: the first call simulates the spec's set into the data cache
+    (byte-identical to make_dataset's file of the same spec), a later call reads it without
+    simulating; another spec (here its seed) is another file; a purpose that is no plain name is
+    refused."""
+    from bearingsim.datasets import cached
+
+    case, a, _, _, _ = files
+    p = cached.cached_dataset(case, "unit", directory=tmp_path, progress=True)
+    assert p.parent == tmp_path and p.name.startswith("unit_6_v") and p.read_bytes() == a.read_bytes()
+    assert "simulated into the data cache" in capsys.readouterr().err
+
+    def refuse(*a, **k):
+        raise AssertionError("simulated again")
+    monkeypatch.setattr(cached, "make_dataset", refuse)
+    assert cached.cached_dataset(case, "unit", directory=tmp_path, progress=True) == p
+    assert "read from the data cache" in capsys.readouterr().err
+    other = case.with_value("dataset.seed", 8)
+    assert cached.cached_name(other, "unit") != p.name
+    with pytest.raises(AssertionError, match="simulated again"):
+        cached.cached_dataset(other, "unit", directory=tmp_path, progress=False)
+    monkeypatch.setenv("BEARINGSIM_CACHE", str(tmp_path / "c"))
+    assert cached.cache_dir() == tmp_path / "c"
+    with pytest.raises(ValueError, match="purpose"):
+        cached.cached_name(case, "../x")

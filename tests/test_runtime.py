@@ -129,9 +129,12 @@ def test_cache_command_says_where_and_clears(tmp_path):
     banks.mkdir()
     (banks / "identify_bank_160_7101_v6.h5").write_bytes(b"x" * 10)
     (banks / "keep.txt").write_text("not a bank")
+    (banks / "transfer_cwru_120_v7_0123456789ab.h5").write_bytes(b"y" * 10)     # a cached data set
+    (banks / "transfer_cwru_120_v7_0123456789ab.h5.lock").write_bytes(b"")
     out = " ".join(run({"BEARINGSIM_CACHE_DIR": str(d), "BEARINGSIM_CACHE": str(banks)}, tmp_path, code))
     assert f"compilation cache: {d}" in out and "cleared:" in out and not entries(d)
     assert "identify banks:" in out and "1 identify bank files deleted" in out     # issue 34: the bank too
+    assert "cached data sets: 1 files" in out and "1 cached data sets deleted" in out
     assert sorted(p.name for p in banks.iterdir()) == ["keep.txt"]
 
 

@@ -63,9 +63,9 @@ def _cluster_flags(s, what):
 
 def _cache_parser(sub):
     s = sub.add_parser("cache", help="where the compiled and traced programs (~/.cache/bearingsim/jax, "
-                       "BEARINGSIM_CACHE_DIR) and the identify banks (~/.cache/bearingsim, BEARINGSIM_CACHE) "
+                       "BEARINGSIM_CACHE_DIR), the identify banks and cached data sets (~/.cache/bearingsim, BEARINGSIM_CACHE) "
                        "are kept, and --clear")
-    s.add_argument("--clear", action="store_true", help="delete the cached programs and identify banks")
+    s.add_argument("--clear", action="store_true", help="delete the cached programs, identify banks and cached data sets")
     s.set_defaults(func=commands.cmd_cache)
     return s
 

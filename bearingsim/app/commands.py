@@ -182,8 +182,8 @@ def cmd_spectrum(args):
 
 
 def cmd_cache(args):
-    """``bearingsim cache [--clear]``: where the compiled and traced programs and the identify
-    banks are kept, how much, clearing."""
+    """``bearingsim cache [--clear]``: where the compiled and traced programs, the identify
+    banks and the cached data sets are kept, how much, clearing."""
     bank_dir = ident_bank.cache_dir
     d = runtime.configured_cache_dir()
     banks = sorted(bank_dir().glob("identify_bank_*"))
@@ -203,6 +203,11 @@ def cmd_cache(args):
     size = sum(p.stat().st_size for p in banks if p.is_file())
     print(f"identify banks: {bank_dir()} ({len(banks)} files, {budget.human_bytes(size)}; simulated records "
           "identify learns from, built once; move them with BEARINGSIM_CACHE=FOLDER)")
+    sets = [p for p in sorted(bank_dir().glob("*.h5")) if p not in banks]
+    if sets:
+        size = sum(p.stat().st_size for p in sets if p.is_file())
+        print(f"cached data sets: {len(sets)} files, {budget.human_bytes(size)} beside them (training sets "
+              "simulated once per spec: bearingsim.datasets.cached_dataset)")
     if args.clear:
         if d is not None:
             print(f"cleared: {runtime.clear_cache(d)} files deleted; the next run of each command compiles again")
@@ -214,6 +219,16 @@ def cmd_cache(args):
             except OSError:
                 pass
         print(f"cleared: {gone} identify bank files deleted; the next identify builds its bank again")
+        gone = 0
+        for p in sets:
+            try:
+                p.unlink()
+                p.with_name(p.name + ".lock").unlink(missing_ok=True)
+                gone += 1
+            except OSError:
+                pass
+        if sets:
+            print(f"cleared: {gone} cached data sets deleted")
     return 0
 
 

@@ -13,7 +13,9 @@ The package's files show the flow (with ``mldata``: the reader of a finished fil
 ``writer``   the resumable chunk files (a folder of raw .npy arrays per chunk, renamed
              atomically) and the HDF5 layout (``/signals`` uncompressed by default: ``compression=``);
 ``runner``   the chunk plan (built physics objects, not the case), the device (``device=``), the
-             chunk size, the in-process loop or a Dask cluster, interrupts, :func:`make_dataset`.
+             chunk size, the in-process loop or a Dask cluster, interrupts, :func:`make_dataset`;
+``cached``   a set simulated once per spec into the data cache and read thereafter
+             (:func:`cached_dataset`: training sets shared by runs, notebooks and tests).
 
 Resumable and interruptible.  Each finished chunk is saved at once (atomically) in the folder
 ``<path>.partial/`` next to the output; an interrupted run (Ctrl-C, SIGTERM, a crash) keeps
@@ -45,6 +47,7 @@ from ..names import lazy_exports
 #: every public name of the data set modules, by module: imported at first use (PEP 562), so that
 #: ``bearingsim.datasets.mldata`` (NumPy and h5py only) does not load JAX through this package
 _EXPORTS = {
+    'cached': ('FileLock', 'cache_dir', 'cached_dataset', 'cached_name'),
     'program': ('BACKGROUND_FIELDS', 'CHUNK_FIELDS', 'DEFAULT_MICRO_BATCH', 'MICRO_BATCH', 'Physics', 'chunk_keys', 'device_program', 'micro_batch', 'plan_program', 'run_settings', 'simulate_chunk'),
     'runner': ('BYTES_PER_SAMPLE', 'DEVICES', 'MAX_GPU_CHUNK', 'ChunkPlan', 'Interrupted', 'default_chunk', 'make_dataset', 'resolve_device', 'serial_imap', 'signal_settings'),
     'spec': ('CLASSES', 'FIELD_STREAMS', 'LABEL_DTYPE', 'LABEL_FIELDS', 'RANGES', 'SPLITS', 'DatasetResult', 'DatasetSummary', 'class_counts', 'class_of_index', 'defect_geometry', 'draw_labels', 'item_keys', 'item_locations', 'item_seeds', 'result_messages', 'settings', 'simulation_order', 'slots_of', 'transfer_paths'),
@@ -60,4 +63,4 @@ __all__ = ["ChunkPlan", "CHUNK_FIELDS", "BACKGROUND_FIELDS", "simulate_chunk", "
            "item_seeds", "class_counts", "class_of_index", "item_locations", "slots_of", "transfer_paths",
            "simulation_order", "defect_geometry", "settings", "result_messages", "make_dataset", "partial_path",
            "resolve_device", "default_chunk", "DEVICES", "BYTES_PER_SAMPLE", "MAX_GPU_CHUNK", "CHUNK_FORMAT",
-           "COMPRESSIONS", "DEFAULT_COMPRESSION"]
+           "COMPRESSIONS", "DEFAULT_COMPRESSION", "FileLock", "cache_dir", "cached_dataset", "cached_name"]

@@ -6,7 +6,6 @@ simulated at an estimate.  Method: docs/identify.md.
 from __future__ import annotations
 
 import copy
-import os
 import sys
 import tempfile
 import time
@@ -17,6 +16,7 @@ import numpy as np
 
 from .background_fit import shaft_speed
 from ..case import case_from_dict, load_case
+from ..datasets.cached import FileLock, cache_dir
 from ..datasets.runner import make_dataset
 from ..datasets.writer import CHUNK_FORMAT
 from .fault_size import PASS_FEATURE_NAMES, line_frequency, pass_features, surface_speed
@@ -47,12 +47,6 @@ def bank_spec(count=BANK_COUNT, seed=BANK_SEED, template="dataset_cwru_4class"):
     spec = load_case(template) if not hasattr(template, "with_value") else template
     return (spec.with_value("dynamics.sample_rate_Hz", BANK_FS).with_value("dataset.duration_s", BANK_WINDOW_S)
             .with_value("dataset.count", int(count)).with_value("dataset.seed", int(seed)))
-
-
-def cache_dir() -> Path:
-    """Where banks are kept: $BEARINGSIM_CACHE, else ~/.cache/bearingsim."""
-    d = os.environ.get("BEARINGSIM_CACHE")
-    return Path(d) if d else Path.home() / ".cache" / "bearingsim"
 
 
 def bank_name(count, seed) -> str:
@@ -88,31 +82,6 @@ def build_bank(path=None, count=BANK_COUNT, seed=BANK_SEED, progress=True) -> Pa
             if progress:
                 print(f"identify: bank built in {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
     return path
-
-
-class FileLock:
-    """An exclusive lock on ``path`` (``fcntl.flock``: released when the holder exits, even by a
-    crash); where the platform has no ``fcntl``, no lock (the bank file is written atomically, so
-    two builders only waste time)."""
-
-    def __init__(self, path):
-        self.path, self.fd, self.fcntl = Path(path), None, None
-
-    def __enter__(self):
-        try:
-            import fcntl
-        except ImportError:         # Windows
-            return self
-        self.fcntl = fcntl
-        self.fd = os.open(self.path, os.O_CREAT | os.O_RDWR, 0o644)
-        fcntl.flock(self.fd, fcntl.LOCK_EX)
-        return self
-
-    def __exit__(self, *exc):
-        if self.fd is not None:
-            self.fcntl.flock(self.fd, self.fcntl.LOCK_UN)
-            os.close(self.fd)
-        return False
 
 
 def measured_shaft_speed(x, fs, nominal_hz) -> float:
