@@ -1,0 +1,87 @@
+"""The CWRU ball records' lines after cepstral pre-whitening, by window length (issue 33, item 4).
+
+    .venv/bin/python benchmarks/check_ball_whitened.py [--realdata ../shared/realdata]
+        [--windows 10,5,2,1,0.2]
+
+Smith & Randall (2015) graded 222 (method 2 only) and 223 diagnosable (Y2) as ball faults;
+method 2 is cepstral pre-whitening: the spectrum's amplitude set to one (phase kept), the squared
+envelope of the whitened signal over the whole band, its spectrum.  This script applies it to the
+ball records, the normal record 97 and the rig's inner- and outer-race records (for the lines a
+fault of another class makes), cut into windows of each ``--windows`` length (s; 10: the whole
+record), and prints per record the mean over its windows of each line's strength: the peak within
+f0 +- (1 % of f0 + 0.5 Hz, at least a bin) over the median within +-6 times that (dB).  Lines at the bearing's
+fault orders (bearingsim.signals.features.fault_orders, contact angle 0) times the record's shaft
+speed measured from its spectrum (bearingsim.realism.identify_bank.measured_shaft_speed near the
+file's rpm).  No classifier and no simulation: what a window of a real ball record carries.
+A line of the normal record is the level a window shows without that fault.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import hilbert
+
+from bearingsim.case import load_case
+from bearingsim.realism.calibration import find_realdata
+from bearingsim.realism.identify_bank import measured_shaft_speed
+from bearingsim.signals.features import fault_orders
+
+#: file stem, CWRU number, Smith & Randall grade (../shared/realdata/README.md)
+RECORDS = [("cwru_B007_0hp_12k", 118, "N1"), ("cwru_B007_1hp_12k", 119, "N1"), ("cwru_B007_2hp_12k", 120, "N1"),
+           ("cwru_B007_3hp_12k", 121, "Y2 (method 3)"), ("cwru_B021_0hp_12k", 222, "Y2 (method 2)"),
+           ("cwru_B021_1hp_12k", 223, "Y2"), ("cwru_B021_2hp_12k", 224, "N1"), ("cwru_B021_3hp_12k", 225, "N1"),
+           ("cwru_normal_0hp_12k_decimated", 97, "normal"), ("cwru_IR021_0hp_12k", 209, "Y1 inner"),
+           ("cwru_OR021_6_0hp_12k", 234, "Y2 outer")]
+
+
+def whitened_envelope_spectrum(x, fs):
+    """(frequencies, |spectrum| of the squared envelope of the pre-whitened signal)."""
+    X = np.fft.rfft(x - np.mean(x))
+    y = np.fft.irfft(X / np.maximum(np.abs(X), 1e-30), len(x))
+    e = np.abs(hilbert(y)) ** 2
+    return np.fft.rfftfreq(len(e), 1.0 / fs), np.abs(np.fft.rfft(e - e.mean())) / len(e)
+
+
+def line_db(f, E, f0):
+    w = max(0.01 * f0 + 0.5, f[1] - f[0])       # at least one bin (a 0.2 s window resolves 5 Hz)
+    peak = E[np.abs(f - f0) <= w].max()
+    return 10.0 * np.log10(peak / np.median(E[np.abs(f - f0) <= 6.0 * w]))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--realdata", default=None, help="the records' folder (default: ../shared/realdata)")
+    ap.add_argument("--windows", default="10,5,2,1,0.2", help="window lengths in s (10: the whole record)")
+    a = ap.parse_args(argv)
+    root = Path(a.realdata) if a.realdata else find_realdata(Path(__file__).resolve().parent.parent)
+    if root is None or not Path(root).is_dir():
+        print("skipped: the CWRU records (../shared/realdata) are not here")
+        return 0
+    o = fault_orders(load_case("cwru_6205").bearing())
+    lines = {"2BSF": o.two_bsf, "4BSF": 2 * o.two_bsf, "2BSF+FTF": o.two_bsf + o.ftf, "BPFI": o.bpfi, "BPFO": o.bpfo,
+             "FTF": o.ftf}
+    lengths = [float(v) for v in a.windows.split(",")]
+    print(f"lines (orders): " + ", ".join(f"{k} {v:.4f}" for k, v in lines.items()))
+    print(f"{'record':>6} {'grade':>14} {'window s':>8} {'n':>3} " + " ".join(f"{k:>9}" for k in lines))
+    for stem, no, grade in RECORDS:
+        p = Path(root) / f"{stem}.npz"
+        if not p.is_file():
+            continue
+        d = np.load(p)
+        x, fs = np.asarray(d["DE"], float), float(d["fs"])
+        fr = measured_shaft_speed(x, fs, float(d["rpm"]) / 60.0)
+        for L in lengths:
+            n = min(len(x), int(round(L * fs)))
+            rows = []
+            for k in range(len(x) // n):
+                f, E = whitened_envelope_spectrum(x[k * n:(k + 1) * n], fs)
+                rows.append([line_db(f, E, v * fr) for v in lines.values()])
+            m = np.mean(rows, axis=0)
+            print(f"{no:>6} {grade:>14} {n / fs:>8.2f} {len(rows):>3} " + " ".join(f"{v:>9.1f}" for v in m))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
