@@ -1,7 +1,8 @@
 """The CWRU ball records' lines after cepstral pre-whitening, by window length (issue 33, item 4).
 
     .venv/bin/python benchmarks/check_ball_whitened.py [--realdata ../shared/realdata]
-        [--windows 10,5,2,1,0.2]
+        [--windows 10,5,2,1,0.2] [--simulated N] [--seed 0] [--exposure gate|kinematic]
+        [--fault ball|inner|outer|healthy]
 
 Smith & Randall (2015) graded 222 (method 2 only) and 223 diagnosable (Y2) as ball faults;
 method 2 is cepstral pre-whitening: the spectrum's amplitude set to one (phase kept), the squared
@@ -12,20 +13,30 @@ record), and prints per record the mean over its windows of each line's strength
 f0 +- (1 % of f0 + 0.5 Hz, at least a bin) over the median within +-6 times that (dB).  Lines at the bearing's
 fault orders (bearingsim.signals.features.fault_orders, contact angle 0) times the record's shaft
 speed measured from its spectrum (bearingsim.realism.identify_bank.measured_shaft_speed near the
-file's rpm).  No classifier and no simulation: what a window of a real ball record carries.
+file's rpm).  No classifier: what a window of a real ball record carries.
 A line of the normal record is the level a window shows without that fault.
+
+``--simulated N``: beside the records, N ball items of 1 s of the CWRU rig's training spec
+(:func:`bearingsim.realism.transfer.rig_spec` of the shipped four-class spec, every item a ball
+fault, data set seed ``--seed``, ``[dataset] ball_exposure`` ``--exposure``), measured the same way at each item's own shaft speed (its
+label): the mean over the items, the quartiles, and the means of the items whose ball pit
+struck on most (>= 50 %) and on few (< 50 %) of its passes, line by line against the records.
 """
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 
 import numpy as np
 from scipy.signal import hilbert
 
 from bearingsim.case import load_case
+from bearingsim.datasets import make_dataset
+from bearingsim.errors import succeeded
 from bearingsim.realism.calibration import find_realdata
 from bearingsim.realism.identify_bank import measured_shaft_speed
+from bearingsim.realism.transfer import RIGS, rig_spec
 from bearingsim.signals.features import fault_orders
 
 #: file stem, CWRU number, Smith & Randall grade (../shared/realdata/README.md)
@@ -50,10 +61,49 @@ def line_db(f, E, f0):
     return 10.0 * np.log10(peak / np.median(E[np.abs(f - f0) <= 6.0 * w]))
 
 
+def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball"):
+    """(line strengths (n_ok, len(lines)), strike probabilities (n_ok,)) of ``n`` simulated
+    1 s ball items of the CWRU rig spec, one window of ``window_s`` each (the item's start)."""
+    import tempfile
+
+    import h5py
+
+    spec = rig_spec(load_case("dataset_cwru_4class"), RIGS["cwru"], max(1.0, window_s), n, seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        text = spec.text
+        for k in ("healthy", "outer", "inner", "ball"):      # all at once: they sum to 1
+            v = 1.0 if k == fault else 0.0
+            text = re.sub(rf"(?m)^{k}_fraction\s*=.*$", f"{k}_fraction = {v}", text)
+        (Path(tmp) / "ball.toml").write_text(text)
+        spec = load_case(Path(tmp) / "ball.toml").with_value("dataset.ball_exposure", exposure)
+        path = Path(tmp) / "ball.h5"
+        make_dataset(spec, path)
+        with h5py.File(path, "r") as f:
+            X = np.asarray(f["signals"], float)
+            lab = np.asarray(f["labels"])
+            fs = float(f.attrs["sample_rate_Hz"])
+    ok = succeeded(lab["result"])
+    X, lab = X[ok], lab[ok]
+    T = int(round(window_s * fs))
+    rows = []
+    for x, fr in zip(X[:, :T], lab["shaft_Hz"]):
+        f, E = whitened_envelope_spectrum(x, fs)
+        rows.append([line_db(f, E, v * fr) for v in lines.values()])
+    strike = lab["strike_probability"]
+    return np.asarray(rows), np.asarray(strike, float)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--realdata", default=None, help="the records' folder (default: ../shared/realdata)")
     ap.add_argument("--windows", default="10,5,2,1,0.2", help="window lengths in s (10: the whole record)")
+    ap.add_argument("--simulated", type=int, default=0, help="also N simulated 1 s ball items (CWRU rig spec)")
+    ap.add_argument("--seed", type=int, default=0, help="data set seed of the simulated items")
+    ap.add_argument("--fault", default="ball", help="class of the simulated items: ball (default), inner, "
+                    "outer or healthy (the same measure on the other classes: is a line's strength off for "
+                    "one class or for all)")
+    ap.add_argument("--exposure", default="gate", help="[dataset] ball_exposure of the simulated items: gate "
+                    "(the shipped spec's) or kinematic")
     a = ap.parse_args(argv)
     root = Path(a.realdata) if a.realdata else find_realdata(Path(__file__).resolve().parent.parent)
     if root is None or not Path(root).is_dir():
@@ -80,6 +130,19 @@ def main(argv=None):
                 rows.append([line_db(f, E, v * fr) for v in lines.values()])
             m = np.mean(rows, axis=0)
             print(f"{no:>6} {grade:>14} {n / fs:>8.2f} {len(rows):>3} " + " ".join(f"{v:>9.1f}" for v in m))
+    if a.simulated > 0:
+        for L in lengths:
+            if L > 1.0:
+                continue
+            R, p = simulated_rows(a.simulated, a.seed, lines, L, a.exposure, a.fault)
+            sel = {"sim mean": np.ones(len(R), bool), "sim p>=0.5": p >= 0.5, "sim p<0.5": p < 0.5}
+            for name, m in sel.items():
+                if m.any():
+                    print(f"{'sim':>6} {name:>14} {L:>8.2f} {int(m.sum()):>3} "
+                          + " ".join(f"{v:>9.1f}" for v in R[m].mean(axis=0)))
+            for q in (25, 50, 75):
+                print(f"{'sim':>6} {f'quartile {q}':>14} {L:>8.2f} {len(R):>3} "
+                      + " ".join(f"{v:>9.1f}" for v in np.percentile(R, q, axis=0)))
     return 0
 
 
