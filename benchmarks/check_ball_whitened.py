@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/check_ball_whitened.py [--realdata ../shared/realdata]
         [--windows 10,5,2,1,0.2] [--simulated N] [--seed 0] [--exposure gate|kinematic]
-        [--fault ball|inner|outer|healthy]
+        [--fault ball|inner|outer|healthy] [--ball-snr LO,HI]
 
 Smith & Randall (2015) graded 222 (method 2 only) and 223 diagnosable (Y2) as ball faults;
 method 2 is cepstral pre-whitening: the spectrum's amplitude set to one (phase kept), the squared
@@ -16,11 +16,14 @@ speed measured from its spectrum (bearingsim.realism.identify_bank.measured_shaf
 file's rpm).  No classifier: what a window of a real ball record carries.
 A line of the normal record is the level a window shows without that fault.
 
-``--simulated N``: beside the records, N ball items of 1 s of the CWRU rig's training spec
-(:func:`bearingsim.realism.transfer.rig_spec` of the shipped four-class spec, every item a ball
-fault, data set seed ``--seed``, ``[dataset] ball_exposure`` ``--exposure``), measured the same way at each item's own shaft speed (its
-label): the mean over the items, the quartiles, and the means of the items whose ball pit
-struck on most (>= 50 %) and on few (< 50 %) of its passes, line by line against the records.
+``--simulated N``: beside the records, N items of 1 s of the CWRU rig's training spec
+(:func:`bearingsim.realism.transfer.rig_spec` of the shipped four-class spec; every item of
+class ``--fault``, ball by default; data set seed ``--seed``; ``[dataset] ball_exposure``
+``--exposure``; ``[dataset] ball_fault_snr_dB`` ``--ball-snr`` where given), measured the same
+way at each item's own shaft speed (its label), one window per item (its start) of each
+``--windows`` length up to 1 s: the mean over the items, the quartiles, and the means of the
+items whose ball pit struck on most (>= 50 %) and on few (< 50 %) of its passes, line by line
+against the records (docs/realism.md, "Simulated items, the same measure").
 """
 from __future__ import annotations
 
@@ -61,7 +64,7 @@ def line_db(f, E, f0):
     return 10.0 * np.log10(peak / np.median(E[np.abs(f - f0) <= 6.0 * w]))
 
 
-def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball"):
+def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball", ball_snr=None):
     """(line strengths (n_ok, len(lines)), strike probabilities (n_ok,)) of ``n`` simulated
     1 s ball items of the CWRU rig spec, one window of ``window_s`` each (the item's start)."""
     import tempfile
@@ -76,6 +79,8 @@ def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball"):
             text = re.sub(rf"(?m)^{k}_fraction\s*=.*$", f"{k}_fraction = {v}", text)
         (Path(tmp) / "ball.toml").write_text(text)
         spec = load_case(Path(tmp) / "ball.toml").with_value("dataset.ball_exposure", exposure)
+        if ball_snr is not None:
+            spec = spec.with_value("dataset.ball_fault_snr_dB", list(ball_snr))
         path = Path(tmp) / "ball.h5"
         make_dataset(spec, path)
         with h5py.File(path, "r") as f:
@@ -102,6 +107,8 @@ def main(argv=None):
     ap.add_argument("--fault", default="ball", help="class of the simulated items: ball (default), inner, "
                     "outer or healthy (the same measure on the other classes: is a line's strength off for "
                     "one class or for all)")
+    ap.add_argument("--ball-snr", default=None, help="lo,hi: [dataset] ball_fault_snr_dB of the simulated ball "
+                    "items (dB; default: the spec's)")
     ap.add_argument("--exposure", default="gate", help="[dataset] ball_exposure of the simulated items: gate "
                     "(the shipped spec's) or kinematic")
     a = ap.parse_args(argv)
@@ -113,7 +120,7 @@ def main(argv=None):
     lines = {"2BSF": o.two_bsf, "4BSF": 2 * o.two_bsf, "2BSF+FTF": o.two_bsf + o.ftf, "BPFI": o.bpfi, "BPFO": o.bpfo,
              "FTF": o.ftf}
     lengths = [float(v) for v in a.windows.split(",")]
-    print(f"lines (orders): " + ", ".join(f"{k} {v:.4f}" for k, v in lines.items()))
+    print("lines (orders): " + ", ".join(f"{k} {v:.4f}" for k, v in lines.items()))
     print(f"{'record':>6} {'grade':>14} {'window s':>8} {'n':>3} " + " ".join(f"{k:>9}" for k in lines))
     for stem, no, grade in RECORDS:
         p = Path(root) / f"{stem}.npz"
@@ -134,7 +141,8 @@ def main(argv=None):
         for L in lengths:
             if L > 1.0:
                 continue
-            R, p = simulated_rows(a.simulated, a.seed, lines, L, a.exposure, a.fault)
+            R, p = simulated_rows(a.simulated, a.seed, lines, L, a.exposure, a.fault,
+                                  None if a.ball_snr is None else [float(v) for v in a.ball_snr.split(",")])
             sel = {"sim mean": np.ones(len(R), bool), "sim p>=0.5": p >= 0.5, "sim p<0.5": p < 0.5}
             for name, m in sel.items():
                 if m.any():

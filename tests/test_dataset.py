@@ -665,3 +665,23 @@ def test_a_cached_data_set_is_simulated_once_per_spec(files, tmp_path, monkeypat
     assert cached.cache_dir() == tmp_path / "c"
     with pytest.raises(ValueError, match="purpose"):
         cached.cached_name(case, "../x")
+
+
+def test_the_ball_class_draws_its_fault_level_from_its_own_range():
+    """``ball_fault_snr_dB`` (issue 33: the CWRU ball records' periodic signature, whitened, reads as
+    the model's ball items ~20 dB weaker than the race faults', docs/realism.md): the ball items'
+    ``snr_dB`` labels lie in its range, the race items' in ``fault_snr_dB``, healthy items 0.  The
+    same stream draws both, so absent (or equal to ``fault_snr_dB``) it leaves every label as
+    before, bit for bit.  Without ``fault_snr_dB`` it is refused, naming both keys."""
+    base = load_case(ROOT / "cases" / "dataset_cwru_4class.toml").with_value("dataset.count", 40)
+    lab0 = draw_labels(base)
+    assert draw_labels(base.with_value("dataset.ball_fault_snr_dB", [-6, 25])).tobytes() == lab0.tobytes()
+    lab = draw_labels(base.with_value("dataset.ball_fault_snr_dB", [-25, -20]))
+    c, s = lab["fault_class"], lab["snr_dB"]
+    assert np.all((s[c == 3] >= -25) & (s[c == 3] <= -20)) and (c == 3).sum() == 10
+    assert np.array_equal(s[c != 3], lab0["snr_dB"][c != 3]) and np.all(s[c == 0] == 0)
+    assert np.all((s[(c == 1) | (c == 2)] >= -6) & (s[(c == 1) | (c == 2)] <= 25))
+    names = [f for f in lab.dtype.names if f != "snr_dB"]
+    assert all(np.array_equal(lab[f], lab0[f]) for f in names)
+    with pytest.raises(CaseError, match="ball_fault_snr_dB.*fault_snr_dB"):
+        load_case(ROOT / "cases" / "dataset_cwru.toml").with_value("dataset.ball_fault_snr_dB", [-25, 6])

@@ -74,6 +74,9 @@ def dataset_problems(data: dict, problems: list[str], geometry_ok: bool, raw_dat
     if "fault_snr_dB" in ds and ds.get("background", "none") == "none":
         problems.append(f"dataset.fault_snr_dB = {fmt_value(ds['fault_snr_dB'])} needs a background to stand "
                         "over: set dataset.background = \"random\" or \"machine\", or remove fault_snr_dB")
+    if "ball_fault_snr_dB" in ds and "fault_snr_dB" not in ds:
+        problems.append(f"dataset.ball_fault_snr_dB = {fmt_value(ds['ball_fault_snr_dB'])} is the ball class's "
+                        "fault_snr_dB: give dataset.fault_snr_dB (every fault class's) too, or remove it")
     noise = data.get("dynamics", {}).get("noise_rms_m_s2", 0.0)
     if ds.get("background", "none") != "none" and isinstance(noise, (int, float)) and noise > 0.0:
         problems.append(f"dataset.background = \"{ds['background']}\" with dynamics.noise_rms_m_s2 = "

@@ -541,6 +541,10 @@ SCHEMA: dict[str, Section] = {
                                    "scaled so that its RMS stands this far over its background's RMS (drawn "
                                    "uniform in dB; replaces signal_gain for fault items; needs a background)",
                                    "dB", OPTIONAL, ge=-60, le=80),
+            "ball_fault_snr_dB": _range("fault_snr_dB of the ball items only (absent: fault_snr_dB): a ball "
+                                        "pit's periodic signature stands weaker over a machine's background "
+                                        "than a race pit's of the same size (docs/realism.md, the CWRU ball "
+                                        "records whitened)", "dB", OPTIONAL, ge=-60, le=80),
             "ball_strike_probability": _range("probability that a ball pit strikes the raceways on a "
                                               "pass (its spin axis wanders), drawn uniform per item; "
                                               "1: every pass", "", [1.0, 1.0], ge=0, le=1),

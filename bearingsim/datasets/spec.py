@@ -211,7 +211,8 @@ def _draw_one(key, cls, r):
     choice = jax.random.randint(k["outer_position"], (), 0, pos.shape[0])
     out["spall_center_deg"] = jnp.where((cls == 1) & r["has_positions"], pos[choice], out["spall_center_deg"])
     out["signal_gain"] = _logu(k["signal_gain"], r["signal_gain"][0], r["signal_gain"][1])
-    out["snr_dB"] = jnp.where((cls > 0) & r["has_snr"], _u(k["snr_dB"], r["snr_dB"][0], r["snr_dB"][1]), 0.0)
+    snr = r["snr_dB"][jnp.where(cls == 3, 1, 0)]          # the ball class's own range (ball_fault_snr_dB)
+    out["snr_dB"] = jnp.where((cls > 0) & r["has_snr"], _u(k["snr_dB"], snr[0], snr[1]), 0.0)
     out["strike_probability"] = jnp.where(cls == 3, _u(k["strike_probability"], *r["strike"]), 1.0)
     out["split_u"] = jax.random.uniform(k["split"], (), jnp.float64)
     out["realism_seed"] = jax.random.bits(k["realism_seed"], (), jnp.uint32)
@@ -237,7 +238,9 @@ def _tables(sc, ds):
     pos = ds.get("outer_center_positions_deg")
     r["positions"], r["has_positions"] = np.asarray(pos or [0.0], float), bool(pos)
     r["signal_gain"] = rng("signal_gain")
-    r["snr_dB"], r["has_snr"] = rng("fault_snr_dB", (0.0, 0.0)), ds.get("fault_snr_dB") is not None
+    snr = rng("fault_snr_dB", (0.0, 0.0))
+    r["snr_dB"] = np.stack([snr, np.asarray(ds.get("ball_fault_snr_dB") or snr, float)])     # (2, 2): others, ball
+    r["has_snr"] = ds.get("fault_snr_dB") is not None
     r["strike"] = rng("ball_strike_probability")
     params = sc.params
     r["modes"] = np.stack([np.asarray(v, float).reshape(-1) for v in params.modes()], -1)   # (M, 3)
