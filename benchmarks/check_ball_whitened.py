@@ -35,8 +35,8 @@ import numpy as np
 from scipy.signal import hilbert
 
 from bearingsim.case import load_case
+from bearingsim import load_dataset
 from bearingsim.datasets import make_dataset
-from bearingsim.errors import succeeded
 from bearingsim.realism.calibration import find_realdata
 from bearingsim.realism.identify_bank import measured_shaft_speed
 from bearingsim.realism.transfer import RIGS, rig_spec
@@ -69,8 +69,6 @@ def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball", 
     1 s ball items of the CWRU rig spec, one window of ``window_s`` each (the item's start)."""
     import tempfile
 
-    import h5py
-
     spec = rig_spec(load_case("dataset_cwru_4class"), RIGS["cwru"], max(1.0, window_s), n, seed)
     with tempfile.TemporaryDirectory() as tmp:
         text = spec.text
@@ -83,12 +81,9 @@ def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball", 
             spec = spec.with_value("dataset.ball_fault_snr_dB", list(ball_snr))
         path = Path(tmp) / "ball.h5"
         make_dataset(spec, path)
-        with h5py.File(path, "r") as f:
-            X = np.asarray(f["signals"], float)
-            lab = np.asarray(f["labels"])
-            fs = float(f.attrs["sample_rate_Hz"])
-    ok = succeeded(lab["result"])
-    X, lab = X[ok], lab[ok]
+        X, lab, meta = load_dataset(path)       # the items simulated (result 0) only
+    fs = float(meta["sample_rate_Hz"])
+    X = np.asarray(X, float)
     T = int(round(window_s * fs))
     rows = []
     for x, fr in zip(X[:, :T], lab["shaft_Hz"]):
