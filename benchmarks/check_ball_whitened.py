@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/check_ball_whitened.py [--realdata ../shared/realdata]
         [--windows 10,5,2,1,0.2] [--simulated N] [--seed 0] [--exposure gate|kinematic]
-        [--fault ball|inner|outer|healthy] [--ball-snr LO,HI]
+        [--fault ball|inner|outer|healthy] [--ball-snr LO,HI] [--spec SPEC]
 
 Smith & Randall (2015) graded 222 (method 2 only) and 223 diagnosable (Y2) as ball faults;
 method 2 is cepstral pre-whitening: the spectrum's amplitude set to one (phase kept), the squared
@@ -17,7 +17,7 @@ file's rpm).  No classifier: what a window of a real ball record carries.
 A line of the normal record is the level a window shows without that fault.
 
 ``--simulated N``: beside the records, N items of 1 s of the CWRU rig's training spec
-(:func:`bearingsim.realism.transfer.rig_spec` of the shipped four-class spec; every item of
+(:func:`bearingsim.realism.transfer.rig_spec` of the shipped four-class spec or ``--spec``; every item of
 class ``--fault``, ball by default; data set seed ``--seed``; ``[dataset] ball_exposure``
 ``--exposure``; ``[dataset] ball_fault_snr_dB`` ``--ball-snr`` where given), measured the same
 way at each item's own shaft speed (its label), one window per item (its start) of each
@@ -64,12 +64,13 @@ def line_db(f, E, f0):
     return 10.0 * np.log10(peak / np.median(E[np.abs(f - f0) <= 6.0 * w]))
 
 
-def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball", ball_snr=None):
+def simulated_rows(n, seed, lines, window_s=1.0, exposure="gate", fault="ball", ball_snr=None,
+                   spec_name="dataset_cwru_4class"):
     """(line strengths (n_ok, len(lines)), strike probabilities (n_ok,)) of ``n`` simulated
     1 s ball items of the CWRU rig spec, one window of ``window_s`` each (the item's start)."""
     import tempfile
 
-    spec = rig_spec(load_case("dataset_cwru_4class"), RIGS["cwru"], max(1.0, window_s), n, seed)
+    spec = rig_spec(load_case(spec_name), RIGS["cwru"], max(1.0, window_s), n, seed)
     with tempfile.TemporaryDirectory() as tmp:
         text = spec.text
         for k in ("healthy", "outer", "inner", "ball"):      # all at once: they sum to 1
@@ -102,6 +103,8 @@ def main(argv=None):
     ap.add_argument("--fault", default="ball", help="class of the simulated items: ball (default), inner, "
                     "outer or healthy (the same measure on the other classes: is a line's strength off for "
                     "one class or for all)")
+    ap.add_argument("--spec", default="dataset_cwru_4class", help="the four-class spec the simulated items "
+                    "derive from (a shipped name or a path; default: the shipped one)")
     ap.add_argument("--ball-snr", default=None, help="lo,hi: [dataset] ball_fault_snr_dB of the simulated ball "
                     "items (dB; default: the spec's)")
     ap.add_argument("--exposure", default="gate", help="[dataset] ball_exposure of the simulated items: gate "
@@ -137,7 +140,7 @@ def main(argv=None):
             if L > 1.0:
                 continue
             R, p = simulated_rows(a.simulated, a.seed, lines, L, a.exposure, a.fault,
-                                  None if a.ball_snr is None else [float(v) for v in a.ball_snr.split(",")])
+                                  None if a.ball_snr is None else [float(v) for v in a.ball_snr.split(",")], a.spec)
             sel = {"sim mean": np.ones(len(R), bool), "sim p>=0.5": p >= 0.5, "sim p<0.5": p < 0.5}
             for name, m in sel.items():
                 if m.any():
