@@ -462,10 +462,15 @@ def test_signal_gain_and_background_enter_the_signals_exactly(files, tmp_path):
     bsc = spec(extra='signal_gain = [2.0, 2.0]\nbackground = "random"\nbackground_rms_m_s2 = [0.5, 0.5]\n').build()
     st = signal_settings(bsc, bsc.dataset, fs, x3.shape[1], Physics.of_scenario(bsc))
     keys = chunk_keys(lab["key"])
+
+    @jax.jit                    # one program, not one per operation (eager: ~250 programs)
+    def background(key, shaft_hz):
+        kb = jax.random.split(ss.stream_key(key, "background"))
+        return bgm.background_record(kb[1], bgm.draw_background(kb[0], fs, st.ranges), x3.shape[1], fs, shaft_hz,
+                                     st.knock_max)
+
     for i in range(6):
-        kb = jax.random.split(ss.stream_key(jax.numpy.asarray(keys[i]), "background"))
-        bg = bgm.draw_background(kb[0], fs, st.ranges)
-        want = np.asarray(bgm.background_record(kb[1], bg, x3.shape[1], fs, lab["speed_rpm"][i] / 60.0, st.knock_max))
+        want = np.asarray(background(jax.numpy.asarray(keys[i]), lab["speed_rpm"][i] / 60.0))
         assert np.allclose(x3[i] - x2[i], want, atol=3e-6 * max(1.0, np.abs(x3[i]).max()))
         assert lab["background_noise_rms_m_s2"][i] == pytest.approx(0.5)
 

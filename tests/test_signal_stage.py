@@ -57,7 +57,7 @@ def test_pass_draws_have_their_stated_statistics():
     assert set(np.unique(m)) == {0.0, 1.0}
     assert m.mean() == pytest.approx(p, abs=5 * np.sqrt(p * (1 - p) / n))        # binomial, 5 sigma
     tp = np.concatenate([0.01 + 0.0093 * np.arange(10), np.full(5, np.inf)])
-    sh = np.stack([np.asarray(pv.pass_shifts(k, jnp.asarray(tp), 0.05)) for k in jax.random.split(key, 4000)])
+    sh = np.asarray(jax.jit(jax.vmap(lambda k: pv.pass_shifts(k, jnp.asarray(tp), 0.05)))(jax.random.split(key, 4000)))
     assert np.std(sh) == pytest.approx(0.05 * 0.0093, rel=0.03)               # 64000 normals: 0.3 % s.e.
     assert np.all(np.asarray(pv.pass_shifts(key, jnp.asarray([0.01, np.inf]), 0.05)) == 0.0)   # one pass
 
@@ -101,7 +101,9 @@ def test_white_machine_background_equals_numpy_and_labels():
     rng = np.random.default_rng(7)
     ref = background_signal(rng, n, FS, 25.0, bg)
     draws = replay_draws(np.random.default_rng(7), bg, n, FS, 20)
-    got = bgm.synthesize_background(Background(*(jnp.asarray(v, jnp.float64) for v in bg)), draws, FS, 25.0)
+    # one compiled program, not one per operation (eager: ~160 programs, ~10 s of the suite)
+    synth = jax.jit(lambda b, d: bgm.synthesize_background(b, d, FS, 25.0))
+    got = synth(Background(*(jnp.asarray(v, jnp.float64) for v in bg)), draws)
     assert rel_err(got, ref) < 1e-10
     lab = {k: float(v) for k, v in bgm.background_labels(bg).items()}
     assert lab == pytest.approx(bg.as_labels(), rel=1e-14)
@@ -153,8 +155,8 @@ def test_drawn_backgrounds_are_in_their_ranges(drawn):
 def test_drawn_background_lines_sit_at_their_drawn_frequencies_and_amplitudes():
     n = int(FS)                          # 1 s: 1 Hz bins, every line on a bin
     key = jax.random.PRNGKey(5)
-    bg = bgm.draw_background(key, FS)._replace(noise_rms=0.0, knock_amplitude=0.0)
-    x = np.asarray(bgm.background_record(jax.random.PRNGKey(6), bg, n, FS, 31.0, 4))
+    bg = jax.jit(lambda k: bgm.draw_background(k, FS))(key)._replace(noise_rms=0.0, knock_amplitude=0.0)
+    x = np.asarray(jax.jit(lambda k, b: bgm.background_record(k, b, n, FS, 31.0, 4))(jax.random.PRNGKey(6), bg))
     A = np.abs(np.fft.rfft(x)) * 2 / n
     lines = {31 * k: a for k, a in enumerate(np.asarray(bg.shaft_amplitudes), 1)}
     lf = int(bg.line_frequency)
@@ -172,8 +174,9 @@ def test_modulation_depth_shows_in_the_squared_record():
     bg = Background((), 60.0, (), 1.0, (), (), (m,), 0.0, 0.0, 3000.0, 0.05, ())
     t = np.arange(n) / FS
     ratios = []
-    for k in jax.random.split(jax.random.PRNGKey(0), 16):
-        y = np.asarray(bgm.background_record(k, bg, n, FS, fr, 1)) ** 2
+    records = jax.jit(jax.vmap(lambda k: bgm.background_record(k, bg, n, FS, fr, 1)))
+    for r in np.asarray(records(jax.random.split(jax.random.PRNGKey(0), 16))):
+        y = r ** 2
         c, s = 2 * np.mean(y * np.cos(2 * np.pi * fr * t)), 2 * np.mean(y * np.sin(2 * np.pi * fr * t))
         ratios.append(np.hypot(c, s) / np.mean(y))
     # per record the s.e. of c, s is ~ 2 sqrt(2 / n) = 0.026; over 16 records 0.0065
