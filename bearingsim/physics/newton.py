@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from ..errors import failed
+from ..programs import jit
 
 __all__ = ["LS_STEPS", "FREE_STEPS", "RING_CAP", "BALL_CAP", "NEWTON_FAILURES", "traced_tolerances",
            "max_abs", "cap_step", "accept_step", "step_status", "better", "converged_only", "retry_failed",
@@ -120,16 +121,23 @@ def retry_failed(sol, run, take=better, bad=None):
     if not bad.size:
         return sol
     n_pad = 1 << int(np.ceil(np.log2(bad.size)))
-    retry = run(np.concatenate([bad, np.full(n_pad - bad.size, bad[0])]))
-    retry = jax.tree_util.tree_map(lambda r: r[:bad.size], retry)
-    idx = jnp.asarray(bad)
-    keep = jnp.asarray(take(np.asarray(retry.result), np.asarray(sol.result)[bad]))
+    idx = np.concatenate([bad, np.full(n_pad - bad.size, bad[0])])
+    retry = run(idx)
+    # the padding's rows are the first failed item solved again (the same values): merged with the
+    # rest, one program per padded count instead of one small program per field and operation
+    keep = np.asarray(take(np.asarray(retry.result), np.asarray(sol.result)[idx]))
+    return _merge_retries(sol, retry, jnp.asarray(idx), jnp.asarray(keep))
 
+
+def _merge(sol, retry, idx, keep):
     def merge(a, r):
         m = keep.reshape(keep.shape + (1,) * (r.ndim - 1))
         return a.at[idx].set(jnp.where(m, r, a[idx]))
 
     return jax.tree_util.tree_map(merge, sol, retry)
+
+
+_merge_retries = jit(_merge)
 
 
 # ------------------------------------------------------------ 2x2 solves (a ball's Newton step)
