@@ -399,3 +399,46 @@ def test_failed_items_are_merged_with_their_retries_as_a_loop_would():
         np.testing.assert_array_equal(np.asarray(getattr(got, k)), v)
     ok = Sol(jnp.zeros(4, int), sol.x[:4], sol.y[:4])
     assert retry_failed(ok, run) is ok and len(calls) == 1      # nothing failed: nothing solved again
+
+
+def test_a_failed_solve_and_its_retry_are_one_compiled_program(b218, monkeypatch):
+    """solve's retry with 8 speed steps runs the program of the first try (the stage count is
+    traced, newton.speed_stages): a refused load compiles one Jones program, not two."""
+    from bearingsim import programs
+    from bearingsim.errors import failed
+    from bearingsim.physics import jones as jn
+
+    calls = []
+    first = jn._solve_jit
+
+    def counted(*a, **k):
+        calls.append(int(k["speed_steps"]))
+        return first(*a, **k)
+
+    monkeypatch.setattr(jn, "_solve_jit", counted)
+    seen: dict = {}
+    programs.record(seen)
+    try:
+        # no axial load on an angular contact bearing: refused (low shoulder), after the retry
+        sol = bs.solve(b218, bs.Operation.from_rpm(10000.0, "outer", True, True), [4000.0, 2000.0, 0.0, 0.0, 0.0],
+                       throw=False)
+    finally:
+        programs.record(seen, on=False)
+    assert failed(int(sol.result)) and calls == [1, 8]
+    assert len([key for name, key in seen if "solve_state" in name]) == 1, seen
+
+
+def test_a_traced_stage_count_gives_the_stages_of_a_fixed_one(b218):
+    """newton.speed_stages: the while loop over a traced count runs the stages of the scan over
+    a Python count (the same fractions k / steps): the same iterations and codes, the same state
+    to round-off (the two programs fuse differently: ~1e-16 of each quantity)."""
+    op = bs.Operation.from_rpm(10000.0, "outer", True, True)
+    F = jnp.asarray([2000.0, 0.0, 8000.0, 0.0, 0.0])
+    steps = 3
+    fixed = jax.jit(lambda F: jones.solve_state(b218, op, F, speed_steps=steps))(F)
+    traced = jax.jit(lambda F, n: jones.solve_state(b218, op, F, speed_steps=n))(F, jnp.int32(steps))
+    assert int(fixed.result) == int(traced.result) == 0
+    assert int(fixed.iterations) == int(traced.iterations) and fixed.iterations.dtype == traced.iterations.dtype
+    for name in ("displacement", "Q_inner", "Q_outer", "alpha_inner", "alpha_outer", "ball_position"):
+        a, t = np.asarray(getattr(fixed, name)), np.asarray(getattr(traced, name))
+        np.testing.assert_allclose(t, a, rtol=1e-12, atol=1e-12 * np.max(np.abs(a)), err_msg=name)

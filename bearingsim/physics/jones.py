@@ -59,7 +59,7 @@ from .defect import Spall, canonical_defects, contact_depths
 from ..errors import failed, InputError, InputTypeError, InvalidStateError, NotConvergedError, ResultCode, succeeded
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
-from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed,
+from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed, speed_stages,
                      step_status, traced_tolerances)
 from ..programs import jit
 
@@ -586,12 +586,10 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
 
     if q0 is None:
         qz = initial_displacement(bearing, F, curve) / qs
-        fracs = [0.0] + [k / speed_steps for k in range(1, speed_steps + 1)]
         Y = Yu = None
     else:
         qz = jnp.asarray(q0, jnp.float64) / qs
         qz = jnp.concatenate([qz[:3], jnp.zeros(2)]) if held else qz
-        fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
         Y = None if x0 is None else jnp.asarray(x0, jnp.float64) / UM
         Yu = None if xu0 is None else jnp.asarray(xu0, jnp.float64) / UM
 
@@ -612,8 +610,7 @@ def solve_state(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     Yu = nan if Yu is None else Yu
     pb = problem(1.0)
     jac0 = {k: v for k, v in _zero_piece(bearing.n_balls, defect).items() if k in _JAC_KEYS}
-    (qz, Y, Yu, jac), (codes, its) = lax.scan(stage, (qz, Y, Yu, jac0), jnp.asarray(fracs))
-    code, total_it = codes[-1], jnp.sum(its)
+    (qz, Y, Yu, jac), code, total_it = speed_stages(stage, (qz, Y, Yu, jac0), speed_steps, q0 is None)
     # at rest the closed form is every ball's exact equilibrium for the converged q (rigid-ring
     # static model): it places the balls that carry (next to) nothing, whose position the
     # residual tolerance leaves open
@@ -781,9 +778,10 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     kw = dict(cage_angle=cage_angle, spall=canonical_defects(spall), maxit=maxit, rtol=rtol, atol=atol,
               hertz_method=hertz_method, tilt=tilt)
-    sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=speed_steps, **kw)
+    # the stage count traced (newton.speed_stages): the retry is the same compiled program
+    sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=jnp.int32(speed_steps), **kw)
     if failed(int(sol.result)) and (speed_steps < 8 or q0 is not None):
-        retry = _solve_jit(bearing, op, loads, speed_steps=8, **kw)
+        retry = _solve_jit(bearing, op, loads, q0=None, speed_steps=jnp.int32(8), **kw)
         if bool(better(retry.result, sol.result)):
             sol = retry
     if throw:

@@ -29,7 +29,7 @@ from ..programs import jit
 
 __all__ = ["LS_STEPS", "FREE_STEPS", "RING_CAP", "BALL_CAP", "NEWTON_FAILURES", "traced_tolerances",
            "max_abs", "cap_step", "accept_step", "step_status", "better", "converged_only", "retry_failed",
-           "solve2", "inverse2"]
+           "speed_stages", "solve2", "inverse2"]
 
 #: line-search halvings before a step is declared stalled
 LS_STEPS = 12
@@ -138,6 +138,32 @@ def _merge(sol, retry, idx, keep):
 
 
 _merge_retries = jit(_merge)
+
+
+def speed_stages(stage, carry, speed_steps, cold):
+    """Run ``stage(carry, frac) -> (carry, (code, iterations))`` (int32 code and count) at the
+    speed fractions k / speed_steps, k = 0 (``cold``: the rest state first) or 1, ..., speed_steps;
+    returns ``(carry, the last stage's code, the iterations of all stages)``.
+
+    A Python int ``speed_steps``: a ``lax.scan`` of that many stages.  A traced one (an integer
+    array, as :func:`bearingsim.physics.jones.solve` passes it): one ``while`` loop for any count,
+    so a solve and its 8-step retry are one compiled program, not two; the same fractions
+    (k / speed_steps in float64) and the same stages, so the same results."""
+    if isinstance(speed_steps, (int, np.integer)):
+        steps = int(speed_steps)
+        fracs = ([0.0] if cold else []) + [k / steps for k in range(1, steps + 1)]
+        carry, (codes, its) = jax.lax.scan(stage, carry, jnp.asarray(fracs))
+        return carry, codes[-1], jnp.sum(its)
+    n = jnp.asarray(speed_steps).astype(jnp.int32)
+
+    def body(k, c):
+        carry, _, total = c
+        carry, (code, it) = stage(carry, k.astype(jnp.float64) / n.astype(jnp.float64))
+        return carry, code, total + it.astype(total.dtype)
+
+    start = jnp.int32(0 if cold else 1)
+    # the count's dtype is that of jnp.sum of int32 iterations (the scan form's)
+    return jax.lax.fori_loop(start, n + 1, body, (carry, jnp.int32(-1), jnp.sum(jnp.zeros(1, jnp.int32))))
 
 
 # ------------------------------------------------------------ 2x2 solves (a ball's Newton step)

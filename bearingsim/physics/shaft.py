@@ -63,8 +63,8 @@ from .life import rating_life, set_life
 from .preload import (PRELOAD_CLASSES, STATIC_PRESSURE, preload_class_force, preload_offset, static_axial_capacity,
                       thrust_at_approach)
 from .set_verdict import SET_NEWTON_HINT, raise_for_set, set_verdict, warn_set_overload
-from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, step_status,
-                     traced_tolerances)
+from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, speed_stages,
+                     step_status, traced_tolerances)
 from ..programs import jit
 
 __all__ = [
@@ -698,14 +698,12 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
 
     if x0 is None:
         x = _static_start(sy, bset, bks, curves, e, approach)
-        fracs = [0.0] + [k / speed_steps for k in range(1, speed_steps + 1)]
     else:
         x0 = jnp.asarray(x0, jnp.float64)
         # the spring bearings' unknowns are their approaches (x0 holds the ring shifts u)
         Gz = jnp.stack([(frame_matrix(bset.facings[k]) @ transfer_matrix(bset.positions[k]))[2]
                         for k in range(N)])
         x = jnp.concatenate([x0[:5], sp * (Gz @ x0[:5] - x0[5:])])
-        fracs = [k / speed_steps for k in range(1, speed_steps + 1)]
 
     nan = [jnp.full((len(ix), bset.bearings[ix[0]].n_balls, 2), jnp.nan) for ix in index]
 
@@ -724,8 +722,7 @@ def solve_set_state(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         return (xz, Ys, Yus, jacs), (code, it)
 
     jac0 = [jax.vmap(_zero_jac)(bk) for bk in sy.groups]
-    (xz, Ys, Yus, jacs), (codes, its) = lax.scan(stage, (x / xs, nan, nan, jac0), jnp.asarray(fracs))
-    code, total_it = codes[-1], jnp.sum(its)
+    (xz, Ys, Yus, jacs), code, total_it = speed_stages(stage, (x / xs, nan, nan, jac0), speed_steps, x0 is None)
     at_rest = op.speed == 0.0
     Ys = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, g)[0], Ys[g]) for g in range(len(index))]
     Yus = [jnp.where(at_rest, _closed_form(sy, op, xz * xs, g, True)[0], Yus[g])
@@ -805,9 +802,10 @@ def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     kw = dict(cage_angle=jnp.asarray(cage_angle, jnp.float64), spalls=spalls, maxit=maxit,
               rtol=rtol, atol=atol, hertz_method=hertz_method, offsets=offsets)
-    sol = _solve_jit(bset, op, loads, speed_steps=speed_steps, **kw)
+    # the stage count traced (newton.speed_stages): the retry is the same compiled program
+    sol = _solve_jit(bset, op, loads, speed_steps=jnp.int32(speed_steps), **kw)
     if failed(int(sol.result)) and speed_steps < 8:
-        retry = _solve_jit(bset, op, loads, speed_steps=8, **kw)
+        retry = _solve_jit(bset, op, loads, speed_steps=jnp.int32(8), **kw)
         if succeeded(int(retry.result)):
             sol = retry
     if throw:
