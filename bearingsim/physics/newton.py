@@ -148,7 +148,9 @@ def speed_stages(stage, carry, speed_steps, cold):
     A Python int ``speed_steps``: a ``lax.scan`` of that many stages.  A traced one (an integer
     array, as :func:`bearingsim.physics.jones.solve` passes it): one ``while`` loop for any count,
     so a solve and its 8-step retry are one compiled program, not two; the same fractions
-    (k / speed_steps in float64) and the same stages, so the same results."""
+    (k / speed_steps in float64) and the same stages, so the same iterations and codes and the
+    same state to round-off (the two programs fuse differently: ~1e-16 of each quantity;
+    tests/test_jones.py)."""
     if isinstance(speed_steps, (int, np.integer)):
         steps = int(speed_steps)
         fracs = ([0.0] if cold else []) + [k / steps for k in range(1, steps + 1)]
