@@ -7,7 +7,10 @@ tracing, lowering and compiling (``jax.monitoring`` duration events) and the pro
 
 Each process (controller, xdist workers) writes ``$BEARINGSIM_CENSUS_DIR/<pid>.json`` (default
 ``.census/``) at its end: ``{nodeid: {"wall_s", "trace_s", "lower_s", "compile_s",
-"cache_hit_s", "traced", "loaded", "compiled"}}``.  Notebook kernels run in their own processes
+"cache_hit_s", "traced", "loaded", "compiled"}}`` and, under ``"programs"``, every XLA compilation
+of the process as ``[nodeid, module name, seconds]`` (the report's families: which programs, in
+how many configurations; through JAX's private ``compiler._compile_and_write_cache``, left out
+with a line where this JAX has no such function).  Notebook kernels run in their own processes
 and are not seen: their time shows as wall time only.
 """
 from __future__ import annotations
@@ -30,6 +33,26 @@ COLUMNS = ("wall_s", "trace_s", "lower_s", "compile_s", "cache_hit_s", "traced",
 
 _rows: dict = defaultdict(lambda: dict.fromkeys(COLUMNS, 0.0))
 _current = ["<collection>"]
+_programs: list = []
+
+
+def _log_compilations():
+    """Wrap JAX's compile-and-write-cache step to log (test, module name, seconds) per compilation."""
+    try:
+        from jax._src import compiler
+        inner = compiler._compile_and_write_cache
+    except (ImportError, AttributeError):
+        print("suite_census: this JAX has no compiler._compile_and_write_cache; no program families")
+        return
+
+    def logged(*args, **kwargs):
+        t0 = time.perf_counter()
+        out = inner(*args, **kwargs)
+        name = kwargs.get("module_name", args[5] if len(args) > 5 else "?")
+        _programs.append([_current[0], str(name), round(time.perf_counter() - t0, 4)])
+        return out
+
+    compiler._compile_and_write_cache = logged
 
 
 def _listener(event, duration, **_):
@@ -50,6 +73,7 @@ def _program_counts():
 def pytest_configure(config):
     import jax.monitoring
     jax.monitoring.register_event_duration_secs_listener(_listener)
+    _log_compilations()
 
 
 def pytest_runtest_protocol(item, nextitem):
@@ -72,13 +96,16 @@ def pytest_runtest_makereport(item, call):
 def pytest_unconfigure(config):
     out = Path(os.environ.get("BEARINGSIM_CENSUS_DIR", ".census"))
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{os.getpid()}.json").write_text(json.dumps(_rows, indent=0))
+    (out / f"{os.getpid()}.json").write_text(json.dumps({**_rows, "programs": _programs}, indent=0))
 
 
 def report(folder):
     files: dict = defaultdict(lambda: dict.fromkeys(COLUMNS, 0.0))
+    programs: list = []
     for p in Path(folder).glob("*.json"):
-        for nodeid, row in json.loads(p.read_text()).items():
+        rows = json.loads(p.read_text())
+        programs += rows.pop("programs", [])
+        for nodeid, row in rows.items():
             f = files[nodeid.split("::")[0]]
             for k in COLUMNS:
                 f[k] += row.get(k, 0.0)
@@ -89,6 +116,18 @@ def report(folder):
             total[k] += f[k]
         print(f"{name[:58]:58s} " + " ".join(f"{f[c]:10.1f}" for c in COLUMNS))
     print(f"{'total':58s} " + " ".join(f"{total[c]:10.1f}" for c in COLUMNS))
+    if programs:
+        fam: dict = defaultdict(lambda: [0, 0.0, set()])
+        for nodeid, name, sec in programs:
+            fam[name][0] += 1
+            fam[name][1] += sec
+            fam[name][2].add(nodeid.split("::")[0])
+        small = [sec for _, _, sec in programs if sec < 0.25]
+        print(f"\n{len(programs)} compilations, {sum(s for *_, s in programs):.0f} s; "
+              f"{len(small)} under 0.25 s ({sum(small):.0f} s). Largest program families:")
+        print(f"{'program':40s} {'configurations':>14s} {'seconds':>8s} {'files':>6s}")
+        for name, (n, sec, fs) in sorted(fam.items(), key=lambda kv: -kv[1][1])[:20]:
+            print(f"{name[:40]:40s} {n:14d} {sec:8.1f} {len(fs):6d}")
 
 
 if __name__ == "__main__":
