@@ -203,3 +203,28 @@ def test_an_item_rerun_alone_from_its_key(setup):
     rms = np.sqrt(np.mean(a ** 2))
     assert r.realism["pass_jitter_percent"] == pytest.approx(float(out["pass_jitter_percent"][i]), rel=1e-12)
     assert np.max(np.abs(a - r.sensor_acceleration)) < 1e-6 * rms
+
+
+def test_the_time_loop_is_one_program_for_every_slip(setup, program_run):
+    """Issue 32: the slip and speed fluctuation are data of the time loop
+    (:func:`bearingsim.dynamics.motion_realism`), not static settings: a spec with another slip
+    runs the compiled loop of the first (one key, no second trace or compile), and the slip is
+    applied (the outer pit's passes move).  On the old code (the Realism static) the two keys
+    differ."""
+    from bearingsim import programs
+
+    prog, args, out = program_run
+    other = dyn.chunk_program(setup["b"], samples=T, sample_rate=FS, realism=dyn.Realism(slip_percent=0.2),
+                              max_speed_rpm=1800.0)
+    assert (other.n_knots, other.P) == (prog.n_knots, prog.P)        # the same shapes
+    seen: dict = {}
+    programs.record(seen)
+    try:
+        prog(*args)
+        out2 = other(*args)
+    finally:
+        programs.record(seen, on=False)
+    runs = {key for name, key in seen if name.endswith("program._run")}
+    assert len(runs) == 1, seen
+    a, b = np.asarray(out["sensor"][0]), np.asarray(out2["sensor"][0])
+    assert np.max(np.abs(a - b)) > 1e-3 * np.sqrt(np.mean(a ** 2))

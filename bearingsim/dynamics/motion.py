@@ -41,7 +41,7 @@ from ..keys import STREAMS
 from ..programs import jit
 from .parameters import Realism
 
-__all__ = ["Motion", "draw_motion", "motion_at", "motion_ok", "knot_count", "MOTION_STREAM", "crossings",
+__all__ = ["Motion", "draw_motion", "motion_realism", "motion_at", "motion_ok", "knot_count", "MOTION_STREAM", "crossings",
            "crossing_grid", "pass_count", "defect_times", "motion_labels", "pad_knots", "defect_edge_times",
            "defect_pass_times", "run_labels", "run_motion_at", "FLUCTUATION_TERMS"]
 
@@ -92,22 +92,33 @@ def knot_count(Z, max_cage_hz, duration, fluct=0.0):
     return int(math.ceil(2.0 * (span + 4.0))) + 2
 
 
+def motion_realism(realism: Realism) -> Realism:
+    """What of ``realism`` the motion draw reads -- slip, speed fluctuation and its bandwidth -- as
+    float64 arrays (traced in a program, so one compiled time loop serves every value of them),
+    the rest at its defaults (noise and the pass-to-pass variability belong to the signal
+    stage).  Put on the default device explicitly (a chunk runs under ``jax.transfer_guard``)."""
+    return Realism(*(jax.device_put(np.float64(v)) for v in (
+        realism.slip_percent, realism.speed_fluctuation_percent, realism.speed_fluctuation_bandwidth_Hz)))
+
+
 def draw_motion(key, Z, theta0, omega_c, omega0, duration, slip_center, realism: Realism, n_knots):
-    """One run's cage and shaft motion drawn from a ``jax.random`` key (jit/vmap; ``Z``, ``realism``
-    and ``n_knots`` (:func:`knot_count`) static, the rest traced): speed fluctuation of
+    """One run's cage and shaft motion drawn from a ``jax.random`` key (jit/vmap; ``Z`` and
+    ``n_knots`` (:func:`knot_count`) static, the rest traced; ``realism``'s slip and speed
+    fluctuation may be Python floats or arrays, :func:`motion_realism`): speed fluctuation of
     :data:`FLUCTUATION_TERMS` random-phase sinusoids, frequencies uniform in (0, B]; the slip
     walk's pitches (1 + eps_k), eps_k ~ N(0, sigma^2) clipped to +-0.5, anchored where a ball is
     at ``slip_center`` (the walk starts at the anchor pitch nearest the run's start: the same
     walk, its anchor an integer number of pitches away).  ``omega_c`` <= 0 (a failed item):
     no slip."""
     k_f, k_b, k_s = jax.random.split(key, 3)
-    a = float(realism.speed_fluctuation_percent) / 100.0
+    a = jnp.asarray(realism.speed_fluctuation_percent, jnp.float64) / 100.0
     K = FLUCTUATION_TERMS
     kf, kp = jax.random.split(k_s)
-    f = jnp.maximum(jax.random.uniform(kf, (K,), jnp.float64) * float(realism.speed_fluctuation_bandwidth_Hz), 1e-3)
+    f = jnp.maximum(jax.random.uniform(kf, (K,), jnp.float64)
+                    * jnp.asarray(realism.speed_fluctuation_bandwidth_Hz, jnp.float64), 1e-3)
     ph = jax.random.uniform(kp, (K,), jnp.float64, 0.0, 2 * np.pi)
     theta0, omega_c, omega0 = (jnp.asarray(v, jnp.float64) for v in (theta0, omega_c, omega0))
-    sigma = float(realism.slip_percent) / 100.0
+    sigma = jnp.asarray(realism.slip_percent, jnp.float64) / 100.0
     moving = omega_c > 0.0
     eps_f = jnp.clip(jax.random.normal(k_f, (n_knots,), jnp.float64) * sigma, -0.5, 0.5)
     eps_b = jnp.clip(jax.random.normal(k_b, (BACK_KNOTS,), jnp.float64) * sigma, -0.5, 0.5)

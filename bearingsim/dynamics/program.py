@@ -46,7 +46,7 @@ from .integrate import advance_record, check_scheme, edge_fractions, motion_stag
 from .frequencies import state_frequencies
 from .model import build_model, initial_state
 from .motion import (MOTION_STREAM, defect_times, draw_motion, knot_count, motion_at, motion_labels, motion_ok,
-                     pass_count)
+                     motion_realism, pass_count)
 from .parameters import RESULTS, Realism
 from ..errors import failed, succeeded
 
@@ -299,7 +299,7 @@ class ChunkProgram:
         # the count is data (a traced int32): one compiled time loop serves every count of MENU
         return _run_jit(self.bearing, self.curve, prep, keys, loads, theta0, modes, params,
                         jax.device_put(np.int32(int(iterations))),
-                        self.substeps, self.T, self.fs, self.scheme, self.realism, self.n_knots, self.P,
+                        self.substeps, self.T, self.fs, self.scheme, motion_realism(self.realism), self.n_knots, self.P,
                         self.profile)
 
     def __call__(self, keys, speed_rpm, loads, theta0, location, center, extent, depth, modes, params,

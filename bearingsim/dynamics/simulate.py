@@ -29,8 +29,8 @@ from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_
 from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
 from ..keys import item_keys, stream_key
-from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, run_labels,
-                     run_motion_at)
+from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, motion_realism,
+                     run_labels, run_motion_at)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
 
 __all__ = ["DynamicsResult", "slip_reference",
@@ -195,7 +195,8 @@ def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism,
     if n_knots is None:
         n_knots = knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
     return _draw_from_key_jit(jnp.asarray(key, jnp.uint32), Z, jnp.float64(theta0), jnp.float64(wc),
-                              jnp.float64(omega0), float(duration), jnp.float64(center), realism, int(n_knots))
+                              jnp.float64(omega0), float(duration), jnp.float64(center), motion_realism(realism),
+                              int(n_knots))
 
 
 def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
