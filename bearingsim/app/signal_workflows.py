@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import dynamics
+from .. import dynamics, warm
 from ..case import as_scenario, check_sampling, load_case
 from ..datasets.runner import make_dataset
 from ..case.units import from_si
@@ -55,8 +55,10 @@ def simulate_case(case, *, throw=True, progress=None, **kw):
     duration = kw.pop("duration", sc.duration)
     sample_rate = kw.pop("sample_rate", sc.sample_rate)
     params = kw.pop("params", sc.params)
-    res = dynamics.simulate(sc.bearing, sc.operation, sc.loads, sc.spall, params, duration,
-                            sample_rate, progress=progress, throw=False, **kw)
+    # the programs the last run of this case used load in the background meanwhile (two threads)
+    with warm.prefetching(f"simulate|{sc.text}"):
+        res = dynamics.simulate(sc.bearing, sc.operation, sc.loads, sc.spall, params, duration,
+                                sample_rate, progress=progress, throw=False, **kw)
     if throw and failed(int(res.result)):
         code = dynamics.RESULTS(int(res.result))
         raise dynamics.DynamicsError(f"{sc.source}: the dynamic simulation failed: {code.message} after "
