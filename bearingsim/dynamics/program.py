@@ -343,9 +343,11 @@ def chunk_program(bearing, *, slots=LOCATIONS, profile="rectangular", control="o
                   max_speed_rpm=1800.0) -> ChunkProgram:
     """The device programs of one data set configuration (static: the bearing, the defect
     ``slots`` the items may use, the profile, raceway control, Hertz method, sample rate, the
-    number of ``samples`` per item, ``substeps`` per sample, the scheme, the realism and the
-    fastest shaft speed, which sizes the slip walk and the pass lists).  Call the result per
-    chunk (:meth:`ChunkProgram.__call__`); equal shapes reuse the compiled programs."""
+    number of ``samples`` per item, ``substeps`` per sample, the scheme, and the fastest shaft
+    speed with the realism's slip and speed fluctuation, which size the slip walk and the pass
+    lists; the slip and fluctuation values themselves are data of the time loop,
+    :func:`bearingsim.dynamics.motion_realism`).  Call the result per chunk
+    (:meth:`ChunkProgram.__call__`); equal shapes reuse the compiled programs."""
     return ChunkProgram(bearing, slots=slots, profile=profile, control=control, hertz_method=hertz_method,
                         sample_rate=sample_rate, samples=samples, substeps=substeps, scheme=scheme, realism=realism,
                         max_speed_rpm=max_speed_rpm)
