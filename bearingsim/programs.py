@@ -53,7 +53,7 @@ import jax
 import numpy as np
 
 from . import runtime
-from .xla import compiler_options
+from .xla import compiler_options, lowering_platform
 
 __all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash", "forget", "FORMAT", "record", "kept_programs",
            "count", "Undescribable", "describe"]
@@ -339,7 +339,7 @@ class KeptProgram:
         flat_fun.__name__ = flat_fun.__qualname__ = getattr(self._fun, "__name__", "program")
         specs = [jax.ShapeDtypeStruct(s, np.dtype(t), weak_type=w) for s, t, w in avals]
         try:
-            exp = jax.export.export(jax.jit(flat_fun), platforms=[dev.platform])(*specs)
+            exp = jax.export.export(jax.jit(flat_fun), platforms=[lowering_platform(dev)])(*specs)
             data = exp.serialize()
             exp = jax.export.deserialize(data)          # the same program, cold or warm
             blob = pickle.dumps({"format": FORMAT, "name": self._name, "exported": bytes(data),

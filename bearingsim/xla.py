@@ -22,7 +22,7 @@ import functools
 import jax
 import jax.numpy as jnp
 
-__all__ = ["PREFERRED_OPTIONS", "compiler_options"]
+__all__ = ["PREFERRED_OPTIONS", "compiler_options", "lowering_platform"]
 
 #: XLA compile options for every bearingsim program (see the module docstring for the measurements)
 PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
@@ -36,3 +36,11 @@ def compiler_options() -> dict:
     except Exception:       # an unknown option in another jaxlib: compile with its defaults
         return {}
     return dict(PREFERRED_OPTIONS)
+
+
+def lowering_platform(dev) -> str:
+    """The platform name :func:`jax.export.export` lowers for on device ``dev``: a JAX device says
+    ``gpu`` where the export needs ``cuda`` or ``rocm`` (seen on an H200, jax 0.11.2)."""
+    if dev.platform != "gpu":
+        return dev.platform
+    return "rocm" if "rocm" in str(getattr(dev.client, "platform_version", "")).lower() else "cuda"

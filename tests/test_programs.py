@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from bearingsim import programs, warm
+from bearingsim import programs, warm, xla
 from bearingsim.programs import jit
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -186,3 +186,25 @@ def test_prefetching_loads_what_the_last_run_used_before_it_is_called(tmp_path, 
     with warm.prefetching("another name"):  # nothing recorded under it: nothing loaded
         pass
     assert programs.counts()["prefetched"] == after["prefetched"]
+
+
+def test_the_export_lowers_for_the_platform_a_gpu_device_names():
+    """A JAX GPU device says ``gpu`` but :func:`jax.export.export` lowers for ``cuda`` or ``rocm``:
+    exporting with the device's own name failed every kept program on an H200 (jax 0.11.2,
+    2026-11-28: "exported for platforms ('gpu',) but it is used on ('cuda',)").  The CPU's name
+    is its lowering platform, and the name given is one the exporter accepts."""
+    class Client:
+        def __init__(self, version):
+            self.platform_version = version
+
+    class Device:
+        def __init__(self, platform, version=""):
+            self.platform, self.client = platform, Client(version)
+
+    assert xla.lowering_platform(Device("gpu", "PJRT C API\ncuda 13000")) == "cuda"
+    assert xla.lowering_platform(Device("gpu", "rocm 6.2")) == "rocm"
+    cpu = jax.devices("cpu")[0]
+    assert xla.lowering_platform(cpu) == "cpu"
+    exp = jax.export.export(jax.jit(lambda a: a + 1.0), platforms=[xla.lowering_platform(cpu)])(
+        jax.ShapeDtypeStruct((2,), np.float64))
+    assert exp.platforms == ("cpu",)

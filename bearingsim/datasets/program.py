@@ -73,8 +73,10 @@ MICRO_BATCH = {"cpu": 4, "gpu": 8192}
 #: W of a platform not in :data:`MICRO_BATCH`
 DEFAULT_MICRO_BATCH = 1024
 #: device memory per item and sample of a micro-batch's programs (states, accelerations, sensor,
-#: signal stage; generous), and the share of the device memory a micro-batch may take
-GPU_BYTES_PER_SAMPLE = 512
+#: signal stage), and the share of the device memory a micro-batch may take.  Measured on an H200
+#: (jax 0.11.2, 2026-11-28, benchmarks/bench_gpu.py): the process's peak device memory was 112 B
+#: per item and sample at W 8192 (4.12 GiB) and at W 32768 (16.46 GiB); 128 keeps a margin.
+GPU_BYTES_PER_SAMPLE = 128
 GPU_MEMORY_SHARE = 0.25
 
 
@@ -88,14 +90,18 @@ def micro_batch(platform, dev=None, samples=None, count=None) -> int:
       two of them keep both cores busy even for 8 items);
     * gpu: the largest power of two up to 8192 whose items of ``samples`` samples fit in a
       quarter of the device's memory at :data:`GPU_BYTES_PER_SAMPLE` bytes per item and sample
-      (8192 for 4800 samples on an 80 GB H100 or a 141 GB H200).  8192: measured on an H200
-      (issue 32, the CEO's run; no GPU in the session that set it): 32 768 items ran ~2.6x as
-      fast at W 8192 as at W 1024 (~1000 vs ~385 items/s after compilation).  W depends on the
-      device's memory and the item length only, so one GPU model and one spec give identical
-      bytes for any chunk size and worker count.  A data set of fewer items (``count``) runs at
-      the power of two that holds them, at least 1024 (16 items do not pay for 8192: a GPU
-      program's time grows with its width once the device is full), so on a GPU an item's last
-      bits may depend on the count below 8192 items (never on the chunk size or the workers);
+      (8192 for 4800 samples on an 80 GB H100 or a 141 GB H200).  Measured on one H200 (jax
+      0.11.2, 2026-11-28, ``benchmarks/bench_gpu.py``, four-class 0.1 s items at 48 kHz, a
+      W-item data set's second call in one process): W 8192 2621-2808 items/s, W 32768 3344
+      items/s; 10^5 items as a whole command 49.7 s at W 8192 and 48.2 s at W 32768 (which pads
+      10^5 items to 131 072).  8192 kept: the wider width's 19 % did not reach the whole command
+      and would have changed every GPU item's bytes.  (Earlier, issue 32's CEO run: 32 768 items
+      ~2.6x as fast at W 8192 as at W 1024.)  W depends on the device's memory and the item
+      length only, so one GPU model and one spec give identical bytes for any chunk size and
+      worker count.  A data set of fewer items (``count``) runs at the power of two that holds
+      them, at least 1024 (16 items: 6.7-6.9 s as a whole command on the H200, 3.9 s of it the
+      call), so on a GPU an item's last bits may depend on the count below 8192 items (never on
+      the chunk size or the workers);
     * other platforms: :data:`DEFAULT_MICRO_BATCH`."""
     if platform is None:
         import jax

@@ -45,9 +45,10 @@ __all__ = ["ChunkPlan", "Interrupted", "serial_imap", "threaded_imap", "make_dat
 
 #: the device names of ``--device`` (JAX platform names)
 DEVICES = ("cpu", "gpu")
-#: device memory per item and sample of a chunk's program (states, accelerations, sensor; a
-#: generous figure: the GPU chunk rule keeps to a quarter of the device memory)
-BYTES_PER_SAMPLE = 512
+#: device memory per item and sample of a chunk's programs (states, accelerations, sensor,
+#: signal stage): 112 B measured on an H200 (2026-11-28, benchmarks/bench_gpu.py, peak of the
+#: process at W 8192 and 32768) and a margin; the GPU chunk rule keeps to a quarter of the memory
+BYTES_PER_SAMPLE = 128
 MAX_GPU_CHUNK = 8192
 
 
