@@ -250,10 +250,12 @@ def _tables(sc, ds):
     return r
 
 
-#: the label draw runs on a power of two of items, at least this many (the rest discarded): one
-#: program serves every count up to it, and each count above shares one with its neighbours (a new
-#: count traced and compiled its own program: ~5 s on 2 cores, the suite's many small counts)
+#: the label draw runs on blocks of a fixed width: a set of at most DRAW_BUCKET items on one block
+#: of that width, a larger one on blocks of DRAW_BLOCK (the last padded and the rest discarded).
+#: Two programs serve every count (a power-of-two width per count traced one more program for each
+#: new power: the "traced 1" of a warm 10^5-item run on a GPU, 2026-11-28; ~2 s on 2 cores)
 DRAW_BUCKET = 64
+DRAW_BLOCK = 4096
 
 
 def _draw(sc, ds, start, n):
@@ -261,13 +263,18 @@ def _draw(sc, ds, start, n):
     cls = class_of_index(ds, total)[start:start + n]
     r = _tables(sc, ds)             # host arrays: the program takes them as they are (no eager copies)
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
-    width = max(DRAW_BUCKET, 1 << max(n - 1, 0).bit_length())
-    padded = np.concatenate([cls, np.zeros(width - n, cls.dtype)])     # every item's draws are its own
+    width = DRAW_BUCKET if n <= DRAW_BUCKET else DRAW_BLOCK
+    blocks = -(-n // width)
+    padded = np.concatenate([cls, np.zeros(blocks * width - n, cls.dtype)])     # every item's draws are its own
+    parts = []
     with _cpu():
-        out = _draw_batch(np.int64(int(ds["seed"])), np.arange(start, start + width, dtype=np.uint32), padded, r,
-                          flags)
-        keys = np.asarray(out.pop("key"))[:n].astype(np.uint32)
-        return keys, cls, {k: np.asarray(v)[:n] for k, v in out.items()}
+        for b in range(blocks):
+            o = b * width
+            parts.append(_draw_batch(np.int64(int(ds["seed"])), np.arange(start + o, start + o + width, dtype=np.uint32),
+                                     padded[o:o + width], r, flags))
+    out = {k: np.concatenate([np.asarray(p[k]) for p in parts])[:n] for k in parts[0]}
+    keys = out.pop("key").astype(np.uint32)
+    return keys, cls, out
 
 
 @jit
