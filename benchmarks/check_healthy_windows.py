@@ -40,6 +40,7 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--realdata", default=str(ROOT.parent / "shared" / "realdata"))
     ap.add_argument("--spec", default="dataset_cwru_4class")
+    ap.add_argument("--ingredients", default=None, help="comma list: the spec's realism_ingredients instead of its own")
     a = ap.parse_args(argv)
     rig = tr.RIGS[a.rig]
     data_dir = tr.rig_data_dir(a.realdata, rig)
@@ -51,7 +52,10 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         for win in (float(w) for w in a.windows.split(",")):
             path = Path(tmp) / f"{a.rig}_{win:g}.h5"
-            make_dataset(tr.rig_spec(spec, rig, win, a.count, a.seed), path, progress=False)
+            rs = tr.rig_spec(spec, rig, win, a.count, a.seed)
+            if a.ingredients is not None:
+                rs = rs.with_value("dataset.realism_ingredients", [k for k in a.ingredients.split(",") if k])
+            make_dataset(rs, path, progress=False)
             sim = tr.simulated_windows(path, orders, win, "plain")
             real = tr.real_windows(data_dir, orders, win, rig.records, features="plain",
                                    sample_rate_Hz=rig.sample_rate_Hz)

@@ -193,7 +193,8 @@ def test_option_off_keeps_the_items_of_before():
     # ~8-14 s cold (the signal stage compiled with every ingredient: the gate's own path); 2 s warm
     N, T = 4, 1200
     s = SignalSettings(FS, T, "random", pass_cv_max=0.02, pass_delay_max=0.05, fault_snr_dB=(0.0, 10.0),
-                       strike_probability=(0.5, 1.0), modes=((3000.0,), (0.02,), (1.0,)), ingredients=nu.INGREDIENTS)
+                       strike_probability=(0.5, 1.0), modes=((3000.0,), (0.02,), (1.0,)),
+                       ingredients=("ball_fault_model", "nuisance", "shaft_modulation"))    # issue 26's
     assert s.ball_exposure == "gate" and not s.passes().exposure
     t = np.arange(T) / FS
     tp = np.full((N, 24), np.inf)

@@ -143,3 +143,39 @@ def test_vmapped_is_itemwise_and_keyed():
 def test_unknown_settings_are_named():
     with pytest.raises(ValueError, match="ball_nonsense"):
         nu.settings_of({"ball_nonsense": (0, 1)})
+
+
+def test_race_waviness_lines_have_their_depths():
+    """The factor is 1 + d_j cos(2 pi f_j t + .) + d_j r_j cos(4 pi f_j t + .): on whole cycles its
+    Fourier amplitude at f_j is the drawn depth d_j (the label), at 2 f_j at most d_j and at least
+    the lowest ratio of ``waviness_second`` times it, its mean 1; with every order present."""
+    f_r = 30.0          # frequencies on whole cycles of the 0.2 s record: 5 Hz bins
+    ftf, bpfo, bpfi, bsf = 12.0, 105.0, 160.0, 70.0
+    s = {"waviness_probability": 1.0, "waviness_depth": (0.02, 0.2), "waviness_second": (0.2, 1.0)}
+    for seed in range(4):
+        w, lab = nu.race_waviness(jax.random.PRNGKey(seed), T, FS, ftf, bpfo, bpfi, bsf, s)
+        A = 2 * np.abs(np.fft.rfft(np.asarray(w))) / T
+        assert np.asarray(w).mean() == pytest.approx(1.0, abs=1e-12)
+        for f, name in ((bpfo, "bpfo"), (bpfi, "bpfi"), (2 * bsf, "2bsf")):
+            d = float(lab[f"waviness_{name}_depth"])
+            k = int(round(f * T / FS))
+            assert 0.02 <= d <= 0.2
+            assert A[k] == pytest.approx(d, rel=1e-9), name
+            assert 0.2 * d * (1 - 1e-9) <= A[2 * k] <= d * (1 + 1e-9), name
+        assert A[int(round(f_r * T / FS))] < 1e-12          # nothing at the shaft rate
+
+
+def test_race_waviness_orders_are_present_at_their_probability():
+    """Each of the three orders is present with ``waviness_probability`` (0.5, the default): over
+    300 keys (fixed, so the count is too) the share of present orders lies within 4 sigma of 0.5,
+    and the depths are log-uniform (median within 15 % of the geometric mean of the range)."""
+    keys = jax.random.split(jax.random.PRNGKey(11), 300)
+    f = jax.jit(jax.vmap(lambda k: nu.race_waviness(k, 256, FS, 12.0, 105.0, 160.0, 70.0)[1]))
+    lab = f(keys)
+    d = np.stack([np.asarray(lab[k]) for k in ("waviness_bpfo_depth", "waviness_bpfi_depth", "waviness_2bsf_depth")])
+    on = d > 0
+    p = on.mean()
+    assert abs(p - 0.5) < 4 * np.sqrt(0.25 / on.size)
+    lo, hi = nu.NUISANCE_DEFAULTS["waviness_depth"]
+    assert np.all((d[on] >= lo) & (d[on] <= hi))
+    assert np.median(d[on]) == pytest.approx(np.sqrt(lo * hi), rel=0.15)

@@ -23,11 +23,13 @@ DATA = find_realdata(REPO)
 needs_data = pytest.mark.skipif(DATA is None, reason="the real CWRU records (../shared/realdata) are not here: "
                                 "the transfer benchmark needs them (see ../shared/realdata/README.md)")
 
-#: floors of the small-set test (120 items: measured 0.669 RF, 0.661 LR; the ceiling the two
+#: floors of the small-set test (120 items: measured 0.669 RF, 0.661 LR; with race_waviness in
+#: the shipped spec, 2026-11-28, LR 0.593: its outer recall on OR014 / OR021 fell; the 300-item
+#: benchmark's 0.2 s figures moved inside their seed spread, docs/realism.md; the ceiling the two
 #: signature-less records leave is 0.67, the issue measured 0.55-0.61 before): balanced
 #: accuracy over the six records' windows, and the two unambiguous records (the rig's 0.007 in
 #: outer and inner race faults: strong lines at their own frequency)
-FLOOR_BALANCED = 0.60
+FLOOR_BALANCED = 0.58
 FLOOR_CLEAR = 0.90
 
 
@@ -116,8 +118,8 @@ def no_failed_item(path):
 
 
 #: the training set of both floors below: the shipped four-class spec at the benchmark's sampling
-#: (0.2 s items at 12 kHz), DEV_COUNT items, the shipped spec's own ``realism_ingredients`` (none
-#: since issue 33's measurement, docs/realism.md; simulated once for the module)
+#: (0.2 s items at 12 kHz), DEV_COUNT items, the shipped spec's own ``realism_ingredients``
+#: (race_waviness since 2026-11-28, docs/realism.md; simulated once for the module)
 DEV_COUNT = 120
 
 
@@ -125,7 +127,7 @@ DEV_COUNT = 120
 def train(tmp_path_factory):
     pytest.importorskip("sklearn", reason="the transfer benchmark needs scikit-learn (pip install 'bearingsim[ml]')")
     spec = load_case("dataset_cwru_4class")
-    assert tuple(spec.get("dataset.realism_ingredients")) == ()     # the shipped spec: none (docs/realism.md)
+    assert tuple(spec.get("dataset.realism_ingredients")) == ("race_waviness",)     # the shipped spec (docs/realism.md)
     spec = (spec.with_value("dynamics.sample_rate_Hz", 12000).with_value("dataset.duration_s", 0.2)
             .with_value("dataset.count", DEV_COUNT))
     # the session's data cache (tests/conftest.py): notebook 07 reads the same set
@@ -161,9 +163,10 @@ def test_plot_transfer_writes_the_figure(tmp_path):
 #: (2026-11-27, chunk format 7, the shipped spec without issue 26's ingredients; with them 0.731 /
 #: 0.761: a 120-item set moves by more than that between specs, the 300-item benchmark with two
 #: seeds measures RF 0.734 / 0.738 and LR 0.739 / 0.712 without them, docs/realism.md; ball recall
-#: 0.03 / 0.10: the target >= 0.95 is not met); set just under it, per classifier
+#: 0.03 / 0.10: the target >= 0.95 is not met); with race_waviness in the shipped spec
+#: (2026-11-28): RF 0.717, LR 0.636 (outer recall 0.48); set just under it, per classifier
 DEV_WINDOWS = 10
-FLOOR_DEV_Y = {"random_forest": 0.70, "logistic_regression": 0.65}
+FLOOR_DEV_Y = {"random_forest": 0.70, "logistic_regression": 0.62}
 
 
 @needs_data
@@ -260,7 +263,7 @@ def test_hit_records_are_the_npz_metadata():
 #: floors of the plain feature set on CWRU (issue 33): the module's ``train`` set (DEV_COUNT items
 #: of 0.2 s at 12 kHz), the first DEV_WINDOWS windows of every Y-graded record; balanced accuracy
 #: per classifier, set just under the figure measured with this configuration (docstring below)
-FLOOR_DEV_Y_PLAIN = {"random_forest": 0.67, "logistic_regression": 0.72}
+FLOOR_DEV_Y_PLAIN = {"random_forest": 0.665, "logistic_regression": 0.71}
 
 
 @needs_data
@@ -268,7 +271,8 @@ FLOOR_DEV_Y_PLAIN = {"random_forest": 0.67, "logistic_regression": 0.72}
 def test_dev_set_floor_plain_features(train):
     """Measured (2026-11-27, 2-core CPU, make test's XLA flags), chunk format 7 and the shipped spec
     without issue 26's ingredients: RF 0.681, LR 0.731 (with them 0.694 / 0.619; before format 7
-    0.714 / 0.639; Y-graded balanced; the own features on the same set: 0.719 / 0.664)."""
+    0.714 / 0.639; Y-graded balanced; the own features on the same set: 0.719 / 0.664).  With
+    race_waviness in the shipped spec (2026-11-28): RF 0.678, LR 0.722."""
     spec, path = train
     reports = transfer_benchmark(path, DATA, fault_orders(spec.bearing()), 0.2, dev_records("Y"),
                                  max_windows=DEV_WINDOWS, features="plain")
@@ -285,8 +289,8 @@ HIT_COUNT = 64
 HIT_WINDOWS = 10
 #: balanced accuracy (three classes) per (feature set, classifier), set just under the figure
 #: measured with this configuration (test docstring)
-FLOOR_HIT = {("own", "random_forest"): 0.96, ("own", "logistic_regression"): 0.80,
-             ("plain", "random_forest"): 0.97, ("plain", "logistic_regression"): 0.83}
+FLOOR_HIT = {("own", "random_forest"): 0.95, ("own", "logistic_regression"): 0.89,
+             ("plain", "random_forest"): 0.97, ("plain", "logistic_regression"): 0.89}
 HIT_DATA = None if DATA is None or not (DATA / "hit_mfs").is_dir() else DATA / "hit_mfs"
 
 
@@ -298,7 +302,9 @@ def test_hit_floor():
     CPU), chunk format 7 and the shipped spec without issue 26's ingredients: own RF 0.978, own LR
     0.811, plain RF 0.985, plain LR 0.844 (with them 0.881 / 0.900 / 0.952 / 0.870; before format 7
     0.926 / 0.841 / 0.930 / 0.819), balanced over the three classes; the LR's weak classes are
-    healthy (recall 0.73 / 0.53) and, own, inner (0.70).  The floors sit 0.01-0.02 under.
+    healthy (recall 0.73 / 0.53) and, own, inner (0.70).  With race_waviness in the shipped spec
+    (2026-11-28): 0.963 / 0.907 / 0.989 / 0.911 (LR healthy recall 0.93 / 0.73).  The floors sit
+    0.01-0.02 under.
     42-46 s on the shared 2-core machine,
     cold or with a filled compilation cache (the HIT speed bound sizes a program of its own; the
     module's CWRU fixture costs 80-240 s the same way)."""

@@ -580,10 +580,12 @@ SCHEMA: dict[str, Section] = {
                                           "the pit's edge, load-zone and ring-waviness modulation), nuisance "
                                           "(shaft and looseness lines, rub, lines near bearing orders, knocks "
                                           "in every class, at the background RMS), shaft_modulation (the "
-                                          "whole record modulated at shaft orders and half orders); each "
+                                          "whole record modulated at shaft orders and half orders), race_waviness (a "
+                                          "healthy bearing's own orders: the background modulated at BPFO, "
+                                          "BPFI and 2 BSF, every class); each "
                                           "drawn from the item's key (ranges: bearingsim.signals.nuisance."
                                           "NUISANCE_DEFAULTS, docs/realism.md); [] none",
-                                          ("ball_fault_model", "nuisance", "shaft_modulation"), []),
+                                          ("ball_fault_model", "nuisance", "shaft_modulation", "race_waviness"), []),
             "split_fractions": Key("numbers", "train, validation and test fractions of the label field "
                                    "split (0, 1, 2), assigned per item and class: windows of one item "
                                    "never straddle two parts", "", [0.7, 0.15, 0.15]),

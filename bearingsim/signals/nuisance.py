@@ -44,6 +44,11 @@ Ingredients (docs/realism.md, "Issue 26"; the physics of the ball fault: docs/ph
     revolution), lines near bearing orders that are not faults (band noise modulated at
     ``(1 + delta)`` x one of BPFO, BPFI, 2 BSF, present with ``near_line_probability``), and
     impulsive knocks at random times (Poisson, up to ``knock_max`` per record).
+:func:`race_waviness`
+    A healthy bearing's own orders: the background (its rolling noise) amplitude-modulated at
+    BPFO, BPFI and 2 BSF and their second harmonics, each present with ``waviness_probability``
+    at a depth drawn from ``waviness_depth`` (varying compliance, race and ball waviness), every
+    class (issue 33: both rigs' healthy machines carry lines at bearing orders).
 :func:`fault_level`
     The fault's RMS over the background's, ``fault_snr_dB`` (down to negative dB), as the gain of
     the fault signal.
@@ -63,7 +68,8 @@ from ..errors import InputError
 from ..names import CLASS_NUMBER
 from ..keys import STREAMS, item_keys
 
-__all__ = ["NUISANCE_DEFAULTS", "INGREDIENTS", "item_signal", "ball_fault_modulation", "shaft_modulation", "nuisance_signal", "fault_level",
+__all__ = ["NUISANCE_DEFAULTS", "INGREDIENTS", "item_signal", "ball_fault_modulation", "shaft_modulation", "nuisance_signal",
+           "race_waviness", "fault_level",
            "load_zone_factor", "band_noise", "item_key", "settings_of"]
 
 #: ranges (lo, hi) of every draw; uniform unless the name says log.  Sources: docs/realism.md.
@@ -103,6 +109,13 @@ NUISANCE_DEFAULTS = {
     "knock_Hz": (1000.0, 5500.0),           # ringing resonance (log)
     "knock_damping": (0.01, 0.08),
     "knock_max": 16,                        # static: the most knocks a record can hold
+    # a healthy bearing's own orders (race_waviness): the rolling noise modulated at BPFO, BPFI, 2 BSF.
+    # The depth's top is a range fitted to records: the HIT-MFS normal records (hit_mfs_normal_600rpm,
+    # _900rpm, _1200rpm) carry a BPFI envelope line of 12.9 dB (median, at most 15.6) over the local
+    # median in 1 s windows (1-2.5 kHz), which a depth of ~0.1-0.15 makes; 0.2 (~17 dB) holds them
+    "waviness_probability": 0.5,            # each order present with this probability ...
+    "waviness_depth": (0.02, 0.2),          # ... at this modulation depth (log)
+    "waviness_second": (0.2, 1.0),          # its second harmonic's depth / the first's
     # fault level (fault_level)
     "fault_snr_dB": (-6.0, 25.0),
 }
@@ -300,6 +313,29 @@ def nuisance_signal(key, T, fs, shaft_hz, ftf_hz, bpfo_hz, bpfi_hz, bsf_hz, rms,
                "near_line_Hz": jnp.where(near_on, f_near * (1 + delta), 0.0), "knock_rate_Hz": rate}
 
 
+def race_waviness(key, T, fs, ftf_hz, bpfo_hz, bpfi_hz, bsf_hz, settings=None):
+    """(T,) the factor ``max(0, 1 + sum_j p_j [d_j cos(2 pi f_j t + a_j) + d_j r_j cos(4 pi f_j t
+    + b_j)])`` by which a healthy bearing's own imperfections modulate its rolling noise, at f_j =
+    BPFO, BPFI, 2 BSF: varying compliance and outer-race waviness of Z waves (BPFO), inner-race
+    waviness of Z waves turning under the balls (BPFI), ball waviness of even order (2 BSF)
+    (Wardle 1988; Harris & Kotzalas, vol. 2, ch. 27); each present (``p_j``) with
+    ``waviness_probability``, depth ``d_j`` log-uniform in ``waviness_depth``, second harmonic
+    ``r_j`` in ``waviness_second``.  Every class: a line at a bearing order is then no proof of a
+    fault.  Returns (factor, labels: the three depths, 0 where absent)."""
+    s = settings_of(settings)
+    ks = jax.random.split(key, 4)
+    t = jnp.arange(T) / fs
+    on = jax.random.uniform(ks[0], (3,)) < s["waviness_probability"]
+    lo, hi = s["waviness_depth"]
+    d = jnp.where(on, jnp.exp(jax.random.uniform(ks[1], (3,), jnp.float64, jnp.log(lo), jnp.log(hi))), 0.0)
+    r = jax.random.uniform(ks[2], (3,), jnp.float64, *s["waviness_second"])
+    ph = jax.random.uniform(ks[3], (2, 3), jnp.float64, 0.0, 2.0 * jnp.pi)
+    f = jnp.stack([bpfo_hz, bpfi_hz, 2.0 * bsf_hz])
+    w = 2.0 * jnp.pi * f[:, None] * t[None, :]
+    env = 1.0 + jnp.sum(d[:, None] * (jnp.cos(w + ph[0, :, None]) + r[:, None] * jnp.cos(2.0 * w + ph[1, :, None])), 0)
+    return jnp.maximum(env, 0.0), {"waviness_bpfo_depth": d[0], "waviness_bpfi_depth": d[1], "waviness_2bsf_depth": d[2]}
+
+
 def fault_level(key, fault, background, settings=None):
     """The gain that puts ``fault`` (T,) at a drawn ``fault_snr_dB`` over ``background`` (T,)
     (RMS ratio).  Returns (gain, snr_dB)."""
@@ -310,7 +346,7 @@ def fault_level(key, fault, background, settings=None):
 
 
 #: the ingredients item_signal applies (settings keys, booleans, static)
-INGREDIENTS = ("ball_fault_model", "nuisance", "shaft_modulation")
+INGREDIENTS = ("ball_fault_model", "nuisance", "shaft_modulation", "race_waviness")
 
 
 def item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz, bpfo_hz, bpfi_hz, bsf_hz, settings=None):
@@ -322,7 +358,9 @@ def item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz, bpfo_
     2. a fault (class > 0) scaled to ``fault_snr_dB`` over the background (:func:`fault_level`);
        a healthy item's ``fault`` is dropped;
     3. plus :func:`nuisance_signal` at the background's RMS (``nuisance``);
-    4. the sum modulated by :func:`shaft_modulation` (``shaft_modulation``).
+    4. the sum modulated by :func:`shaft_modulation` (``shaft_modulation``);
+
+    before 2, the background times :func:`race_waviness` (``race_waviness``).
 
     ``settings``: :data:`NUISANCE_DEFAULTS` keys and the switches of :data:`INGREDIENTS` (booleans,
     default on).  Returns (record, labels: snr_dB and each ingredient's draws)."""
@@ -336,6 +374,10 @@ def item_signal(key, fault, background, fault_class, fs, shaft_hz, ftf_hz, bpfo_
         xb, lb = ball_fault_modulation(k[0], x, fs, shaft_hz, ftf_hz, bsf_hz, s)
         x = jnp.where(fault_class == CLASS_NUMBER["ball"], xb, x)
         labels.update({n: jnp.where(fault_class == CLASS_NUMBER["ball"], v, 0.0) for n, v in lb.items()})
+    if on["race_waviness"]:
+        wv, lw = race_waviness(jax.random.fold_in(key, 4), T, fs, ftf_hz, bpfo_hz, bpfi_hz, bsf_hz, s)
+        background = background * wv
+        labels.update(lw)
     g, snr = fault_level(k[1], x, background, s)
     y = jnp.where(fault_class > 0, g, 0.0) * x + background
     labels["snr_dB"] = jnp.where(fault_class > 0, snr, 0.0)

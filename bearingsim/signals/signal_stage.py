@@ -325,6 +325,9 @@ def finish_item(key, housing, sensor, pass_times, unbridged, fault_class, shaft_
         else:
             bg = Background(*(jnp.asarray(v, jnp.float64) for v in s.machine))
         x = background_record(kb[1], bg, T, fs, shaft_hz, s.knock_max)
+        if "race_waviness" in on:    # the healthy bearing's own orders in the rolling noise, every class
+            x = x * _nuisance.race_waviness(jax.random.fold_in(stream_key(key, "nuisance"), 4), T, fs, ftf, bpfo,
+                                            bpfi, bsf, ns)[0]
         out, gain, snr = fault_level(a, x, draws.signal_gain, draws.snr_dB,
                                      (fault_class > 0) & (s.fault_snr_dB is not None))
         labels.update(background_labels(bg))
