@@ -692,16 +692,15 @@ def test_the_ball_class_draws_its_fault_level_from_its_own_range():
         load_case(ROOT / "cases" / "dataset_cwru.toml").with_value("dataset.ball_fault_snr_dB", [-25, 6])
 
 
-def test_label_draw_is_one_program_for_every_large_count(tmp_path, monkeypatch):
-    """Counts above the small bucket draw their labels on fixed-width blocks: a new count traces no
-    new program (a width per power of two traced one on every new power: a warm 10^5-item run
+def test_label_draw_is_one_program_for_every_count(tmp_path, monkeypatch):
+    """Every count draws its labels on blocks of one fixed width: a new count traces no new program (a width per power of two traced one on every new power: a warm 10^5-item run
     still traced one, 2026-11-28), and an item's draws do not depend on the count's block split
     (items 0-99 of the outer class block are the same whether 5000 or 9000 items are drawn)."""
     from bearingsim import programs
     monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
     programs.forget()
     c = load_case("dataset_cwru_4class")
-    draw_labels(c.with_value("dataset.count", 100))
+    draw_labels(c.with_value("dataset.count", 16))
     before = programs.counts()["traced"]
     a = draw_labels(c.with_value("dataset.count", 5000))
     b = draw_labels(c.with_value("dataset.count", 9000))

@@ -250,11 +250,10 @@ def _tables(sc, ds):
     return r
 
 
-#: the label draw runs on blocks of a fixed width: a set of at most DRAW_BUCKET items on one block
-#: of that width, a larger one on blocks of DRAW_BLOCK (the last padded and the rest discarded).
-#: Two programs serve every count (a power-of-two width per count traced one more program for each
-#: new power: the "traced 1" of a warm 10^5-item run on a GPU, 2026-11-28; ~2 s on 2 cores)
-DRAW_BUCKET = 64
+#: the label draw runs on blocks of one fixed width (the last padded, the rest discarded): one
+#: program serves every count (a width per power of two traced one more program for each new
+#: power: the "traced 1" of a warm 10^5-item run on a GPU, 2026-11-28; ~2 s on 2 cores).  A block
+#: draws in ~3 ms on the 2-core CPU, so 16 items pay nothing for it
 DRAW_BLOCK = 4096
 
 
@@ -263,8 +262,8 @@ def _draw(sc, ds, start, n):
     cls = class_of_index(ds, total)[start:start + n]
     r = _tables(sc, ds)             # host arrays: the program takes them as they are (no eager copies)
     flags = {k: r.pop(k) for k in ("has_positions", "has_snr")}
-    width = DRAW_BUCKET if n <= DRAW_BUCKET else DRAW_BLOCK
-    blocks = -(-n // width)
+    width = DRAW_BLOCK
+    blocks = max(1, -(-n // width))
     padded = np.concatenate([cls, np.zeros(blocks * width - n, cls.dtype)])     # every item's draws are its own
     parts = []
     with _cpu():
