@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from .. import runtime
@@ -74,8 +75,9 @@ def cmd_static(args):
     return 0
 
 
-def _sweep(case, output, plot_dir):
-    sol = workflows.sweep_case(case, throw="all", progress=True)
+def _sweep(case, output, plot_dir, sol=None):
+    """The sweep's files, text and figure (``sol``: the sweep already solved, else solved here)."""
+    sol = workflows.sweep_case(case, throw="all", progress=True) if sol is None else sol
     _warn_failures(sol.result, "cage angles")
     io.write_sweep(output, case, sol)
     th = from_si(np.asarray(sol.cage_angle), "deg")
@@ -108,8 +110,9 @@ def cmd_study(args):
     return 0
 
 
-def _simulate(case, output, plot_dir):
-    res = signal_workflows.simulate_case(case)
+def _simulate(case, output, plot_dir, res=None):
+    """The simulation's files, text and figures (``res``: already simulated, else simulated here)."""
+    res = signal_workflows.simulate_case(case) if res is None else res
     io.write_simulation(output, case, res)
     a = np.asarray(res.sensor_acceleration)
     print(f"{case.title}: {float(res.time[-1]):.4f} s simulated in {res.num_steps} steps "
@@ -355,17 +358,24 @@ def cmd_demo(args):
     budget.check_case(case, "demo", out / "simulate.h5")
     _compiling(case, "demo")
     t0 = time.time()
-    print(f"bearingsim demo: {case.source}\n")
-    print(report.info_text(case), "\n")
-    print("[1/4] quasi-static solve")
-    workflows.static_command(case, out / "static.json", out / "static.png", say=print)
-    print("\n[2/4] cage-angle sweep past the spall")
-    _sweep(case, out / "sweep.h5", out)
-    if "dynamics" in case.raw and case.spall() is not None:
-        print("\n[3/4] dynamic simulation past the spall")
-        _simulate(case, out / "simulate.h5", out)
-        print("\n[4/4] squared-envelope spectrum")
-        _spectrum(out / "simulate.h5", out / "envelope_spectrum.png")
+    dynamic = "dynamics" in case.raw and case.spall() is not None
+    # the sweep and the simulation are solved beside the static solve (their programs compile on
+    # the other core; on a first run compiling is most of the demo); files, text and figures
+    # follow in order in this thread
+    with ThreadPoolExecutor(2) as pool:
+        sweep = pool.submit(workflows.sweep_case, case, throw="all", progress=False)
+        sim = pool.submit(signal_workflows.simulate_case, case) if dynamic else None
+        print(f"bearingsim demo: {case.source}\n")
+        print(report.info_text(case), "\n")
+        print("[1/4] quasi-static solve")
+        workflows.static_command(case, out / "static.json", out / "static.png", say=print)
+        print("\n[2/4] cage-angle sweep past the spall")
+        _sweep(case, out / "sweep.h5", out, sweep.result())
+        if dynamic:
+            print("\n[3/4] dynamic simulation past the spall")
+            _simulate(case, out / "simulate.h5", out, sim.result())
+            print("\n[4/4] squared-envelope spectrum")
+            _spectrum(out / "simulate.h5", out / "envelope_spectrum.png")
     print(f"\ndone in {time.time() - t0:.0f} s; all results and plots are in {out.resolve()}")
     _compiled(case, "demo")
     return 0

@@ -111,7 +111,8 @@ _QUANTITIES = [("alpha_inner", r"$\alpha_i$ (deg)", "deg"), ("alpha_outer", r"$\
 def _take(sol, n):
     import jax
 
-    return jax.tree_util.tree_map(lambda a: a[n] if np.ndim(a) > 0 else a, sol)
+    # on host arrays: indexing a JAX array compiles an eager slice and squeeze per field and shape
+    return jax.tree_util.tree_map(lambda a: np.asarray(a)[n] if np.ndim(a) > 0 else a, sol)
 
 
 def spall_traces(sweep_sol, center=0.0):

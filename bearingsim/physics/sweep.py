@@ -198,8 +198,8 @@ def _run(bearing, op, loads, spall, angles, centers, which, maxit, rtol, atol, h
     rep_sols = [solve(bearing, op, loads, cage_angle=angles[int(r)], spall=at(int(r)), **kw)
                 for r in reps]
     ok_rep = np.array([succeeded(int(r.result)) for r in rep_sols])
-    start = jax.tree_util.tree_map(lambda *a: jnp.stack(a)[jnp.asarray(run)], *[
-        (r.displacement, r.ball_position, r.undropped_position) for r in rep_sols])
+    start = jax.tree_util.tree_map(lambda *a: np.stack([np.asarray(v) for v in a])[np.asarray(run)], *[
+        (r.displacement, r.ball_position, r.undropped_position) for r in rep_sols])     # on the host: no eager programs
     sol = _sweep_warm_jit(bearing, op, loads, spall, angles, *start, *tol, hertz_method, **extra)
     # the failed angles (and those whose run's cold solve failed) again from cold starts; a redo
     # replaces a failed angle, or a converged one only when it converged too
