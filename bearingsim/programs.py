@@ -221,8 +221,8 @@ class KeptProgram:
     whose traced programs are kept on disk (:func:`jit`).  Called inside another trace it is a
     plain nested ``filter_jit`` (the outer program's options apply)."""
 
-    def __init__(self, fun, name=None):
-        self._fun = fun
+    def __init__(self, fun, name=None, options=()):
+        self._fun, self._extra = fun, tuple(options)      # extra: per-program XLA options
         self._name = name or f"{getattr(fun, '__module__', '?')}.{getattr(fun, '__qualname__', repr(fun))}"
         self._programs: dict = {}
         self._plain = None
@@ -236,7 +236,7 @@ class KeptProgram:
         with _LOCK:
             COUNTS["unkept"] += 1
         if self._plain is None:
-            self._plain = eqx.filter_jit(self._fun, compiler_options=compiler_options() or None)
+            self._plain = eqx.filter_jit(self._fun, compiler_options=compiler_options(self._extra) or None)
         try:
             return self._plain(*args, **kwargs)
         except ValueError as e:
@@ -258,7 +258,7 @@ class KeptProgram:
             dev = _device(dyn)
             _OUTSIDE.flag = False
             desc = (f"{self._name}|{_canon(self._fun)}|{_canon_tree(tree)}|{_canon(static)}|{avals}|"
-                    f"{dev.platform}|{_canon(compiler_options())}")
+                    f"{dev.platform}|{_canon(compiler_options(self._extra))}")
             disk = not _OUTSIDE.flag
         except _Unkept:
             return self._jit(*args, **kwargs)
@@ -403,11 +403,11 @@ class KeptProgram:
         call.__name__ = call.__qualname__ = getattr(self._fun, "__name__", "program")
         on = jax.sharding.SingleDeviceSharding(dev)
         n = len(exp.in_avals)
-        return jax.jit(call, in_shardings=(on,) * n, compiler_options=compiler_options() or None)
+        return jax.jit(call, in_shardings=(on,) * n, compiler_options=compiler_options(self._extra) or None)
 
     def lower(self, *args, **kwargs):
         """The ordinary (unkept) lowering of ``fun`` for these arguments."""
-        return eqx.filter_jit(self._fun, compiler_options=compiler_options() or None).lower(*args, **kwargs)
+        return eqx.filter_jit(self._fun, compiler_options=compiler_options(self._extra) or None).lower(*args, **kwargs)
 
 
 #: the dicts of (kept program name, key) that the active :func:`record` calls fill
@@ -441,10 +441,10 @@ def describe(value) -> str:
     return _canon(value)
 
 
-def jit(fun=None, *, name=None):
-    """:func:`equinox.filter_jit` (arrays traced, everything else static) whose traced programs
-    are kept in the program cache (see the module docstring); usable as ``jit(f)`` or as a
-    decorator."""
+def jit(fun=None, *, name=None, options=()):
+    """:func:`equinox.filter_jit` (arrays traced, everything else static) whose traced programs are
+    kept in the program cache (module docstring); ``jit(f)`` or a decorator.  ``options``: extra
+    XLA options of this program, (key, value) pairs (:data:`bearingsim.xla.QUICK_COMPILE`)."""
     if fun is None:
-        return lambda f: KeptProgram(f, name)
-    return KeptProgram(fun, name)
+        return lambda f: KeptProgram(f, name, options)
+    return KeptProgram(fun, name, options)

@@ -22,20 +22,30 @@ import functools
 import jax
 import jax.numpy as jnp
 
-__all__ = ["PREFERRED_OPTIONS", "compiler_options", "lowering_platform"]
+__all__ = ["PREFERRED_OPTIONS", "QUICK_COMPILE", "compiler_options", "lowering_platform"]
 
 #: XLA compile options for every bearingsim program (see the module docstring for the measurements)
 PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 
+#: extra options of a program that runs for milliseconds per call and is compiled on a user's first
+#: command (the single Jones state of ``bearingsim static``): LLVM at -O0.  Measured 2026-11-28
+#: (2-core CPU, empty caches, ``bearingsim static demo``): the whole first command 4.2-4.95 s at
+#: XLA's default level, 3.7-3.8 s with -O0 (the Jones program compiles in ~1.2 s instead of ~2.2
+#: s); its solve runs in milliseconds either way.  Batch, sweep and time-loop programs keep the
+#: default level (they run long enough for the optimiser to pay).
+QUICK_COMPILE = (("xla_backend_optimization_level", 0),)
+
 
 @functools.cache
-def compiler_options() -> dict:
-    """:data:`PREFERRED_OPTIONS` if this jaxlib accepts them (checked once), else ``{}``."""
+def compiler_options(extra: tuple = ()) -> dict:
+    """:data:`PREFERRED_OPTIONS` and the ``extra`` (key, value) pairs if this jaxlib accepts them
+    (checked once per ``extra``), else the options it accepts without ``extra``, else ``{}``."""
+    opts = dict(PREFERRED_OPTIONS, **dict(extra))
     try:
-        jax.jit(lambda x: x + 1.0).lower(jnp.zeros(1)).compile(compiler_options=dict(PREFERRED_OPTIONS))
+        jax.jit(lambda x: x + 1.0).lower(jnp.zeros(1)).compile(compiler_options=opts)
     except Exception:       # an unknown option in another jaxlib: compile with its defaults
-        return {}
-    return dict(PREFERRED_OPTIONS)
+        return compiler_options() if extra else {}
+    return opts
 
 
 def lowering_platform(dev) -> str:

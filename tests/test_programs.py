@@ -208,3 +208,21 @@ def test_the_export_lowers_for_the_platform_a_gpu_device_names():
     exp = jax.export.export(jax.jit(lambda a: a + 1.0), platforms=[xla.lowering_platform(cpu)])(
         jax.ShapeDtypeStruct((2,), np.float64))
     assert exp.platforms == ("cpu",)
+
+
+def test_a_program_s_own_options_are_part_of_its_key_and_an_unknown_one_falls_back(tmp_path, monkeypatch):
+    """``jit(f, options=...)`` compiles with the package's options plus its own (the single Jones
+    state at LLVM -O0, ``xla.QUICK_COMPILE``): the same answer as without them, a program of its
+    own (the options are in the key: a warm process never runs the other level's program), and an
+    option this jaxlib does not know gives the package's options alone, not a failure."""
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+    quick = xla.compiler_options(xla.QUICK_COMPILE)
+    assert dict(xla.QUICK_COMPILE).items() <= quick.items() and xla.PREFERRED_OPTIONS.items() <= quick.items()
+    assert xla.compiler_options((("xla_no_such_option_here", 1),)) == xla.compiler_options()
+    x = jnp.linspace(0.0, 1.0, 7)
+    s = Scale(jnp.asarray(2.0), "a")
+    before = programs.counts()["traced"]
+    a = jit(_f)(x, s, 3)
+    b = jit(_f, options=xla.QUICK_COMPILE)(x, s, 3)
+    assert programs.counts()["traced"] == before + 2
+    np.testing.assert_allclose(np.asarray(a["y"]), np.asarray(b["y"]), rtol=1e-15)

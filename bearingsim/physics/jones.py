@@ -62,6 +62,7 @@ from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed, speed_stages,
                      step_status, traced_tolerances)
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 
 __all__ = [
     "RESULTS",
@@ -666,7 +667,7 @@ def ring_reactions(bearing, op, q, cage_angle=0.0, spall: Spall | tuple | None =
 
 
 # ------------------------------------------------------------------------------ entry points
-_solve_jit = jit(solve_state)
+_solve_jit = jit(solve_state, options=QUICK_COMPILE)     # a single state: compiled at -O0 (bearingsim.xla)
 
 
 def raise_for(sol, what: str = "Jones solve", *, bearing=None, in_set=False):

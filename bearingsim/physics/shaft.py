@@ -66,6 +66,7 @@ from .set_verdict import SET_NEWTON_HINT, raise_for_set, set_verdict, warn_set_o
 from .newton import (BALL_CAP, RING_CAP, accept_step, cap_step, converged_only, max_abs, retry_failed, speed_stages,
                      step_status, traced_tolerances)
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 
 __all__ = [
     "BearingSet",
@@ -790,7 +791,7 @@ def _static_start(sy: _System, bset: BearingSet, bks, curves, e, approach):
 
 
 # ------------------------------------------------------------------------------ entry points
-_solve_jit = jit(solve_set_state)
+_solve_jit = jit(solve_set_state, options=QUICK_COMPILE)     # a single state of a set: -O0 (bearingsim.xla)
 
 
 def solve_set(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, spalls=None,
