@@ -19,6 +19,7 @@ import numpy as np
 from ..physics import life
 from ..physics.limits import contact_limits
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 from ..errors import succeeded
 
 __all__ = ["Assessment", "assess_state", "FLAGS"]
@@ -58,7 +59,7 @@ def _contact_limits_jit():
     some thirty small eager ones: a warm ``bearingsim static`` loads one program instead."""
     global _LIMITS_JIT
     if _LIMITS_JIT is None:
-        _LIMITS_JIT = jit(contact_limits)
+        _LIMITS_JIT = jit(contact_limits, options=QUICK_COMPILE)     # once per report: -O0
     return _LIMITS_JIT
 
 

@@ -40,6 +40,7 @@ from jax import lax
 from ..physics.defect import advance, contact_depths
 from ..physics.kinematics import Operation
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 from .ball_force import RECORD_ROWS, BallCarry, bearing_force, bearing_force_chord
 from .parameters import DynamicsParameters
 
@@ -226,7 +227,7 @@ def initial_state(model: DynamicModel, q_rel0, stage0):
     return y0, ok, jnp.concatenate([jnp.zeros(5), acc]), rec
 
 
-initial_state_jit = jit(initial_state)
+initial_state_jit = jit(initial_state, options=QUICK_COMPILE)     # once per simulation: -O0 (bearingsim.xla)
 
 
 def linear_modes(model: DynamicModel):

@@ -39,6 +39,7 @@ import numpy as np
 from ..physics.defect import as_defects
 from ..keys import STREAMS
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 from .parameters import Realism
 
 __all__ = ["Motion", "draw_motion", "motion_realism", "motion_at", "motion_ok", "knot_count", "MOTION_STREAM", "crossings",
@@ -264,7 +265,7 @@ def _defect_times_only(m, Z, defects, spin_ratio, duration, count, offsets):
     return defect_times(m, Z, defects, spin_ratio, duration, count, offsets)[0]
 
 
-_defect_times_jit = jit(_defect_times_only)
+_defect_times_jit = jit(_defect_times_only, options=QUICK_COMPILE)     # once per simulation: -O0
 
 
 def _times(m: Motion, Z, spalls, duration, spin_ratio, offsets):

@@ -37,6 +37,7 @@ import numpy as np
 from jax import lax
 
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 
 __all__ = ["SensorFilter", "sensor_filter", "host_sensor_filter", "host_measurement_noise", "filter_init", "filter_update", "filter_output", "step_response",
            "run_filter", "apply_sensor", "apply_sensor_batch", "measurement_noise", "G"]
@@ -127,7 +128,7 @@ def run_filter(flt: SensorFilter, u):
 
 _run_filter_jit = jit(run_filter)
 _run_filter_batch_jit = jit(jax.vmap(run_filter))
-_sensor_filter_jit = jit(sensor_filter)
+_sensor_filter_jit = jit(sensor_filter, options=QUICK_COMPILE)     # once per simulation: -O0
 
 
 def host_sensor_filter(frequencies, damping_ratios, gains, h) -> SensorFilter:

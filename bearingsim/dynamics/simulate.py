@@ -24,6 +24,7 @@ from .passes import PassSettings, pass_variability
 from .sensor import host_measurement_noise
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
+from ..xla import QUICK_COMPILE
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .frequencies import characteristic_frequencies, spin_ratio
@@ -187,7 +188,7 @@ def _draw_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n
                               realism, n_knots)
 
 
-_draw_from_key_jit = jit(_draw_from_key)
+_draw_from_key_jit = jit(_draw_from_key, options=QUICK_COMPILE)     # once per simulation: -O0
 
 
 def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism, n_knots):
