@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -28,7 +29,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_dataset import PY, _env, counts_of, fresh_cache, spec_file  # noqa: E402
+from bench_dataset import PY, _env, counts_of, spec_file  # noqa: E402
 
 #: the prelude of a measured process: the micro-batch width W set for the GPU (the share of
 #: memory lifted so that the width asked for is the width run), then ``bearingsim`` as a user
@@ -55,10 +56,17 @@ print("COUNTS", c["traced"], c["loaded"], c["compiled"], c["compile_cache_hits"]
 """
 
 
+#: XLA flags of every measured process (``--xla-flags``; users' default: none)
+XLA_FLAGS = ""
+
+
 def measured(W, n_calls, args, tmp, cache=None, timeout=None):
     """(whole wall, [per-call seconds], peak device bytes, stdout) of one process."""
+    env = _env(cache)
+    if XLA_FLAGS:
+        env["XLA_FLAGS"] = XLA_FLAGS
     t0 = time.perf_counter()
-    p = subprocess.run([PY, "-c", CODE, str(W), str(n_calls), *args], env=_env(cache), cwd=tmp,
+    p = subprocess.run([PY, "-c", CODE, str(W), str(n_calls), *args], env=env, cwd=tmp,
                        capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - t0
     if p.returncode != 0:
@@ -68,18 +76,41 @@ def measured(W, n_calls, args, tmp, cache=None, timeout=None):
     return wall, calls, (peak[-1] if peak else 0), p.stdout
 
 
-def small(ds, tmp, say):
-    """Row 1: the 16-item data set, empty cache, then warm (min / median of three)."""
-    w, calls, _, out = measured(0, 1, ds, tmp, fresh_cache(tmp, "e16"))
-    say(f"16 items, whole command, empty cache: {w:.1f} s (the call {calls[0]:.1f} s); {counts_of(out)}")
-    measured(0, 1, ds, tmp)                                       # warms the benchmark's cache
-    walls = []
+def small(ds, tmp, say, W=0, keep=None):
+    """Row 1: the 16-item data set, empty cache (the benchmark's own, empty at its start), then
+    warm (min / median of three); ``W`` the micro-batch width (0: the shipped rule); ``keep`` a
+    path to copy the last warm run's file to (to compare the bytes of two variants)."""
+    tag = f" (W {W}{', XLA_FLAGS ' + XLA_FLAGS if XLA_FLAGS else ''})" if (W or XLA_FLAGS) else ""
+    w, calls, _, out = measured(W, 1, ds, tmp)
+    say(f"16 items{tag}, whole command, empty cache: {w:.1f} s (the call {calls[0]:.1f} s); {counts_of(out)}")
+    walls, inproc = [], []
     for _ in range(3):
-        w, calls, _, out = measured(0, 1, ds, tmp)
+        w, calls, _, out = measured(W, 1, ds, tmp)
         walls.append(w)
+        inproc.append(calls[0])
     walls.sort()
-    say(f"16 items, whole command, warm: min {walls[0]:.1f} / median {walls[1]:.1f} s (target <= 5 s); "
-        f"last call {calls[0]:.1f} s in-process; {counts_of(out)}")
+    inproc.sort()
+    say(f"16 items{tag}, whole command, warm: min {walls[0]:.1f} / median {walls[1]:.1f} s (target <= 5 s); "
+        f"the call min {inproc[0]:.2f} / median {inproc[1]:.2f} s in-process; {counts_of(out)}")
+    if keep:
+        shutil.copy(Path(tmp) / ds[ds.index("-o") + 1].replace("CALL", "0"), keep)
+
+
+def compare(out, names, say):
+    """Say whether the kept files ``names`` (OUT/NAME.h5) of two variants hold the same bytes."""
+    import h5py
+    import numpy as np
+    got = []
+    for n in names:
+        with h5py.File(Path(out) / f"{n}.h5", "r") as h:
+            got.append((h["signals"][()].astype(float), h["labels"][()].tobytes()))
+    (x, la), (y, lb) = got
+    if np.array_equal(x, y) and la == lb:
+        say(f"{names[0]} vs {names[1]}: identical signals and labels")
+        return
+    peak = np.maximum(np.abs(x).max(axis=1), 1e-300)
+    say(f"{names[0]} vs {names[1]}: labels {'identical' if la == lb else 'DIFFER'}; signals differ by <= "
+        f"{np.max(np.abs(x - y).max(axis=1) / peak):.1e} of the item's peak")
 
 
 def main():
@@ -90,7 +121,16 @@ def main():
     ap.add_argument("--budget-s", type=float, default=420.0, help="stop starting new rows after this")
     ap.add_argument("--no-small", action="store_true", help="skip row 1 (the 16-item figures)")
     ap.add_argument("--device", default="gpu", help="cpu: try the script's flow on a CPU (small --widths)")
+    ap.add_argument("--small-width", type=int, default=0, help="row 1's W (0: the shipped rule)")
+    ap.add_argument("--xla-flags", default="", help="XLA_FLAGS of the measured processes (default: none)")
+    ap.add_argument("--keep-small", default="", help="copy row 1's last file to OUT/NAME.h5")
+    ap.add_argument("--compare", default="", help="A,B: compare OUT/A.h5 and OUT/B.h5 (kept by --keep-small) and stop")
     a = ap.parse_args()
+    if a.compare:
+        compare(a.out, a.compare.split(","), print)
+        return 0
+    global XLA_FLAGS
+    XLA_FLAGS = a.xla_flags
     start = time.perf_counter()
     log = Path(a.out) / "gpu.txt"
 
@@ -112,7 +152,7 @@ def main():
         s16 = str(spec_file(tmp, 16, name="s16.toml"))
         ds = ["dataset", s16, "-o", "s16-CALL.h5", "--device", a.device]
         if not a.no_small:
-            small(ds, tmp, say)
+            small(ds, tmp, say, a.small_width, a.keep_small and str(Path(a.out) / f"{a.keep_small}.h5"))
         rate = {}
         for W in [int(x) for x in a.widths.split(",") if x.strip()]:
             left = a.budget_s - (time.perf_counter() - start)
@@ -130,8 +170,9 @@ def main():
             say(f"W {W}: first call (trace, compile, run) {calls[0]:.1f} s; warm call {calls[1]:.1f} s = "
                 f"{rate[W]:.0f} items/s; peak device memory {peak / 2**30:.2f} GiB = "
                 f"{peak / (W * 4800):.0f} B per item and sample; {counts_of(out)}")
-        if not rate:
-            return 1
+        if not rate or a.big <= 0:
+            say(f"bench_gpu: {time.perf_counter() - start:.0f} s in all")
+            return 0 if (rate or a.widths.strip() == "") else 1
         best = max(rate, key=rate.get)
         left = a.budget_s + 150 - (time.perf_counter() - start)
         m = a.big
