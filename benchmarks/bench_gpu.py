@@ -14,6 +14,11 @@ never an earlier session's):
 3. 10^5 items as a whole command, warm cache, at the fastest W of row 2 (fewer items where the
    budget would not hold them, with the figure scaled and marked so).
 
+Variants of row 1 (the twelfth session's runs, docs/scale.md): ``--small-width W`` (row 1's W),
+``--xla-flags=FLAGS`` (XLA_FLAGS of the measured processes; give it with ``=``: the value starts
+with ``--``), ``--keep-small NAME`` (OUT/NAME.h5 kept) and ``--compare A,B`` (whether two kept files
+hold the same bytes); ``--widths ""`` and ``--big 0`` skip rows 2 and 3.
+
 Each figure is printed as it comes and appended to ``--out``/gpu.txt (a lease can end early).
 On a machine without a GPU it says so and stops (CI never runs it).
 """
