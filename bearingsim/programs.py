@@ -138,7 +138,7 @@ def _canon(x, depth=0) -> str:
     """An exact text of a static value (raises :class:`_Unkept` for anything it cannot describe)."""
     if depth > 40:
         raise _Unkept("nested too deep")
-    if x is None or isinstance(x, (bool, int, float, complex, str, bytes)):
+    if x is None or x is Ellipsis or isinstance(x, (bool, int, float, complex, str, bytes)):
         return f"{type(x).__name__}:{x!r}"
     if isinstance(x, enum.Enum):
         return f"E:{type(x).__module__}.{type(x).__qualname__}.{x.name}"
