@@ -20,7 +20,10 @@ from __future__ import annotations
 import functools
 
 import jax
-import jax.numpy as jnp
+import jaxlib
+import numpy as np
+
+from .runtime import cold, mark_warm
 
 __all__ = ["PREFERRED_OPTIONS", "QUICK_COMPILE", "compiler_options", "lowering_platform"]
 
@@ -41,10 +44,16 @@ def compiler_options(extra: tuple = ()) -> dict:
     """:data:`PREFERRED_OPTIONS` and the ``extra`` (key, value) pairs if this jaxlib accepts them
     (checked once per ``extra``), else the options it accepts without ``extra``, else ``{}``."""
     opts = dict(PREFERRED_OPTIONS, **dict(extra))
+    # the verdict is kept per jaxlib and cache folder (a marker file): the check is a compiled
+    # program, ~50 ms of every process's first command on a 2-core CPU even as a cache hit
+    key = f"xla-options|{jaxlib.__version__}|{sorted(opts.items())}"
+    if not cold(key):
+        return opts
     try:
-        jax.jit(lambda x: x + 1.0).lower(jnp.zeros(1)).compile(compiler_options=opts)
+        jax.jit(lambda x: x + 1.0).lower(np.zeros(1)).compile(compiler_options=opts)
     except Exception:       # an unknown option in another jaxlib: compile with its defaults
         return compiler_options() if extra else {}
+    mark_warm(key)
     return opts
 
 
