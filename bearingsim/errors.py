@@ -24,6 +24,7 @@ Every entry point that can fail has ``throw=True`` by default (raise the excepti
 from __future__ import annotations
 
 import enum
+import sys
 
 __all__ = [
     "ResultCode",
@@ -71,12 +72,22 @@ def succeeded(result):
     enumeration) is its enumeration's ``successful`` member: a bool or a boolean array, traceable
     under ``jit``.  The one place a result code is compared; read a failed code's reason with
     ``RESULTS.of(code).message`` / ``.hint``."""
-    return result == SUCCESSFUL
+    return _on_host(result) == SUCCESSFUL
 
 
 def failed(result):
     """Where ``result`` (as :func:`succeeded`) is any other member: the item failed, with a reason."""
-    return result != SUCCESSFUL
+    return _on_host(result) != SUCCESSFUL
+
+
+def _on_host(result):
+    """A concrete JAX array as NumPy (an eager JAX comparison is a program of its own:
+    :mod:`bearingsim.hostarrays`); anything else, tracers included, as it is.  No JAX import
+    here: where JAX is not loaded, ``result`` is no JAX array."""
+    jax = sys.modules.get("jax")
+    if jax is not None and isinstance(result, jax.Array) and not isinstance(result, jax.core.Tracer):
+        return result.__array__()
+    return result
 
 
 class BearingsimError(Exception):

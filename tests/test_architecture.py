@@ -26,7 +26,7 @@ FOLDERS = {
 CORE = {"physics", "signals", "dynamics"}
 EDGE = set(FOLDERS) - CORE
 #: the top-level modules: start-up and the vocabulary every layer shares (no folder's module)
-INFRASTRUCTURE = {"__init__", "_version", "runtime", "errors", "names", "keys", "xla", "programs", "warm", "fastmath"}
+INFRASTRUCTURE = {"__init__", "_version", "runtime", "errors", "names", "keys", "xla", "programs", "warm", "fastmath", "hostarrays"}
 
 
 def stage(path: Path) -> str:

@@ -265,9 +265,9 @@ def study_case(case, *, throw=True, progress=False, runner=None) -> Study:
 
 def _stack(sols):
     import jax
-    import jax.numpy as jnp
 
-    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *sols)
+    # NumPy: one eager JAX program per field otherwise (bearingsim.hostarrays)
+    return jax.tree_util.tree_map(lambda *a: np.stack([np.asarray(v) for v in a]), *sols)
 
 
 def _replace_row(sol, m, row):

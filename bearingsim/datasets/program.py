@@ -169,7 +169,7 @@ def plan_program(plan):
                                   max_speed_rpm=plan_speed(plan))
     W = plan.width
     dev = jax.devices(plan.device)[0] if plan.device else jax.devices()[0]
-    params = jax.device_put(jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (W,)) if jnp.ndim(a) == 0 else a,
+    params = jax.device_put(jax.tree_util.tree_map(lambda a: np.broadcast_to(a, (W,)) if np.ndim(a) == 0 else a,
                                                    ph.params), dev)
     if len(_PROGRAMS) > 4:
         _PROGRAMS.clear()

@@ -8,16 +8,16 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..errors import InputError, NotConvergedError, ResultCode
+from ..hostarrays import f64, xp
 
 __all__ = ["RESULTS", "DynamicsError", "DynamicsParameters", "Realism"]
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+_f64 = f64             # bearingsim.hostarrays: NumPy unless traced
 
 
 def _vec(x):
-    return jnp.atleast_1d(jnp.asarray(x, dtype=jnp.float64))
+    return xp(x).atleast_1d(f64(x))
 
 
 class RESULTS(ResultCode):
@@ -71,8 +71,8 @@ class DynamicsParameters(eqx.Module):
     def modes(self):
         """(frequencies, damping ratios, gains) broadcast to one shape (..., M)."""
         f = self.resonance_frequency
-        return f, jnp.broadcast_to(self.resonance_damping_ratio, f.shape), \
-            jnp.broadcast_to(self.resonance_gain, f.shape)
+        x = xp(f, self.resonance_damping_ratio, self.resonance_gain)
+        return f, x.broadcast_to(self.resonance_damping_ratio, f.shape), x.broadcast_to(self.resonance_gain, f.shape)
 
     @classmethod
     def from_settings(cls, d: dict) -> "DynamicsParameters":

@@ -262,7 +262,9 @@ class ChunkProgram:
         self.control, self.hertz_method = control, hertz_method
         self.fs, self.T, self.substeps, self.scheme = float(sample_rate), int(samples), int(substeps), scheme
         self.realism = Realism() if realism is None else realism
-        self.curve = stiffness_curve(bearing, hertz_method)
+        # the bearing (NumPy outside a program: bearingsim.hostarrays) and its curve go to the
+        # default device once, not with every call of the programs
+        self.bearing, self.curve = jax.device_put((bearing, stiffness_curve(bearing, hertz_method)))
         a = float(self.realism.speed_fluctuation_percent) / 100.0
         sigma = float(self.realism.slip_percent) / 100.0
         dur = self.T / self.fs

@@ -33,6 +33,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..errors import InputError, InputTypeError
+from ..hostarrays import f64
 from ..names import LOCATIONS
 
 PROFILES = ("rectangular", "ball-path")
@@ -41,8 +42,7 @@ __all__ = ["PROFILES", "LOCATIONS", "Spall", "NO_SPALL", "as_defects", "canonica
            "surface_radius", "depth_profile", "contact_depths", "ball_pit_depths", "advance"]
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+_f64 = f64             # bearingsim.hostarrays: NumPy unless traced
 
 
 class Spall(eqx.Module):

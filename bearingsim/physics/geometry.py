@@ -11,14 +11,11 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import InputError
+from ..hostarrays import f64, opt_f64, xp
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
-
-
-def _opt_f64(x):
-    return None if x is None else jnp.asarray(x, dtype=jnp.float64)
+_f64 = f64             # the fields' converters (bearingsim.hostarrays: NumPy unless traced)
+_opt_f64 = opt_f64
 
 
 #: bearing designs: "deep_groove" (full shoulders on both sides of both rings), "angular_contact"
@@ -166,13 +163,15 @@ class Bearing(eqx.Module):
     @property
     def outer_raceway_radius(self):
         """R_o = (d_m + D cos alpha_0)/2: radius along which a spall's arc length is measured (m)."""
-        return 0.5 * (self.pitch_diameter + self.ball_diameter * jnp.cos(self.free_contact_angle))
+        a = self.free_contact_angle            # NumPy's cos is XLA's to the bit (bearingsim.hostarrays)
+        return 0.5 * (self.pitch_diameter + self.ball_diameter * xp(a).cos(a))
 
     @property
     def inner_raceway_radius(self):
         """R_ir = (d_m - D cos alpha_0)/2: radius along which an inner-raceway spall's arc length is
         measured (m; docs/model.md section 9)."""
-        return 0.5 * (self.pitch_diameter - self.ball_diameter * jnp.cos(self.free_contact_angle))
+        a = self.free_contact_angle
+        return 0.5 * (self.pitch_diameter - self.ball_diameter * xp(a).cos(a))
 
     @property
     def inner_raceway_diameter(self):
@@ -213,4 +212,4 @@ class Bearing(eqx.Module):
 
     def ball_azimuths(self, cage_angle=0.0):
         """psi_j = theta_c + 2 pi j / Z, j = 0..Z-1 (rad)."""
-        return cage_angle + self.ball_pitch_angle * jnp.arange(self.n_balls)
+        return cage_angle + self.ball_pitch_angle * xp(cage_angle).arange(self.n_balls)

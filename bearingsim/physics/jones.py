@@ -61,6 +61,7 @@ from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .kinematics import Operation
 from .newton import (BALL_CAP, RING_CAP, accept_step, better, cap_step, max_abs, retry_failed, speed_stages,
                      step_status, traced_tolerances)
+from ..hostarrays import f64, host, xp
 from ..programs import jit
 from ..xla import QUICK_COMPILE
 
@@ -142,8 +143,8 @@ class RESULTS(ResultCode):
 
 def load_vector(axial=0.0, radial_x=0.0, radial_y=0.0, moment_x=0.0, moment_y=0.0):
     """Applied inner-ring loads as the solver's vector [Fx, Fy, Fz, Mx, My] (N, N m)."""
-    return jnp.stack([jnp.asarray(v, dtype=jnp.float64)
-                      for v in (radial_x, radial_y, axial, moment_x, moment_y)])
+    v = (radial_x, radial_y, axial, moment_x, moment_y)
+    return xp(*v).stack([f64(c) for c in v])
 
 
 Loads = load_vector
@@ -436,17 +437,20 @@ class JonesSolution(eqx.Module):
     @property
     def cage_speed(self):
         """Cage speed omega_c (rad/s): the mean of the balls' orbital speeds."""
-        return jnp.mean(self.orbital_speed, axis=-1)
+        w = host(self.orbital_speed)
+        return xp(w).mean(w, axis=-1)
 
     @property
     def max_pressure(self):
         """Largest Hertz peak pressure over both contacts of every ball (Pa)."""
-        return jnp.maximum(jnp.max(self.p_max_inner, axis=-1), jnp.max(self.p_max_outer, axis=-1))
+        pi, po = host(self.p_max_inner), host(self.p_max_outer)
+        x = xp(pi, po)
+        return x.maximum(x.max(pi, axis=-1), x.max(po, axis=-1))
 
     @property
     def overloaded(self):
         """True where a contact pressure exceeds :data:`PRESSURE_WARNING` (a warning)."""
-        return self.max_pressure > PRESSURE_WARNING
+        return host(self.max_pressure) > PRESSURE_WARNING
 
     def message(self):
         """One message per item (a list, also for a single solve)."""
@@ -773,16 +777,16 @@ def solve(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall | tuple
     held at 0, Mx = My = 0 required; ``sol.loads[3:5]`` are the moments that hold them).
     """
     _check_held_loads(loads, tilt)
-    loads = jnp.asarray(loads, dtype=jnp.float64)
-    cage_angle = jnp.asarray(cage_angle, dtype=jnp.float64)
-    q0 = None if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
+    loads = f64(loads)
+    cage_angle = f64(cage_angle)
+    q0 = None if q0 is None else f64(q0)
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     kw = dict(cage_angle=cage_angle, spall=canonical_defects(spall), maxit=maxit, rtol=rtol, atol=atol,
               hertz_method=hertz_method, tilt=tilt)
     # the stage count traced (newton.speed_stages): the retry is the same compiled program
-    sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=jnp.int32(speed_steps), **kw)
+    sol = _solve_jit(bearing, op, loads, q0=q0, speed_steps=np.int32(speed_steps), **kw)
     if failed(int(sol.result)) and (speed_steps < 8 or q0 is not None):
-        retry = _solve_jit(bearing, op, loads, q0=None, speed_steps=jnp.int32(8), **kw)
+        retry = _solve_jit(bearing, op, loads, q0=None, speed_steps=np.int32(8), **kw)
         if bool(better(retry.result, sol.result)):
             sol = retry
     if throw:

@@ -10,6 +10,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..errors import InputError
+from ..hostarrays import f64, xp
 from ..fastmath import recip, rsqrt
 
 #: Raceway-control factors (lambda_i, lambda_o) of docs/model.md section 4.
@@ -17,8 +18,7 @@ CONTROL_FACTORS = {"outer": (0.0, 2.0), "inner": (2.0, 0.0), "equal": (1.0, 1.0)
 _DEN_FLOOR = 0.05
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+_f64 = f64             # bearingsim.hostarrays: NumPy unless traced
 
 
 class Operation(eqx.Module):
@@ -42,7 +42,7 @@ class Operation(eqx.Module):
 
     @classmethod
     def from_rpm(cls, speed_rpm, control="outer", centrifugal=True, gyroscopic=True):
-        return cls(2.0 * jnp.pi * jnp.asarray(speed_rpm, dtype=jnp.float64) / 60.0, control,
+        return cls(2.0 * jnp.pi * f64(speed_rpm) / 60.0, control,
                    float(centrifugal), float(gyroscopic))
 
     @property
@@ -137,8 +137,8 @@ class DefectFrequencies(NamedTuple):
 def defect_frequencies(bearing, shaft_hz, alpha=None) -> DefectFrequencies:
     """FTF, BPFO, BPFI, BSF (docs/model.md section 8) at contact angle ``alpha`` (rad, default alpha_0)."""
     alpha = bearing.free_contact_angle if alpha is None else alpha
-    f = jnp.asarray(shaft_hz, dtype=jnp.float64)
-    gc = bearing.g * jnp.cos(alpha)
+    f = f64(shaft_hz)
+    gc = bearing.g * xp(f, alpha).cos(alpha)
     Z = bearing.n_balls
     ftf = 0.5 * f * (1.0 - gc)
     bsf = f * (1.0 - gc ** 2) / (2.0 * bearing.g)

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from ..hostarrays import f64
+
 __all__ = [
     "WEIBULL_SLOPE",
     "nominal_angle",
@@ -45,8 +47,7 @@ __all__ = [
 WEIBULL_SLOPE = 10.0 / 9.0
 
 
-def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+_f64 = f64             # bearingsim.hostarrays: NumPy unless traced
 
 
 def nominal_angle(bearing, contact_angle=None):

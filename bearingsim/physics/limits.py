@@ -27,6 +27,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from ..hostarrays import host, xp
 from .kinematics import CONTROL_FACTORS
 
 __all__ = ["PRESSURE_LIMIT", "FRICTION_COEFFICIENT", "ContactLimits", "contact_limits",
@@ -57,55 +58,62 @@ class ContactLimits(eqx.Module):
     over_shoulder_inner: jnp.ndarray       # bool: a loaded contact's centre is at or beyond an edge
     over_shoulder_outer: jnp.ndarray
 
+    # NumPy on a concrete result, JAX on a traced one (bearingsim.hostarrays)
     @property
     def overpressure(self):
         """(..., Z) bool: a contact above the pressure limit."""
-        return (self.pressure_ratio_inner > 1.0) | (self.pressure_ratio_outer > 1.0)
+        return (host(self.pressure_ratio_inner) > 1.0) | (host(self.pressure_ratio_outer) > 1.0)
 
     @property
     def slip(self):
         """(..., Z) bool: raceway control needs more friction than is available."""
-        return self.friction_ratio > 1.0
+        return host(self.friction_ratio) > 1.0
 
     @property
     def truncated(self):
-        return self.truncated_inner | self.truncated_outer
+        return host(self.truncated_inner) | host(self.truncated_outer)
 
     @property
     def over_shoulder(self):
-        return self.over_shoulder_inner | self.over_shoulder_outer
+        return host(self.over_shoulder_inner) | host(self.over_shoulder_outer)
 
     @property
     def any_overpressure(self):
-        return jnp.any(self.overpressure, axis=-1)
+        x = self.overpressure
+        return xp(x).any(x, axis=-1)
 
     @property
     def any_slip(self):
-        return jnp.any(self.slip, axis=-1)
+        x = self.slip
+        return xp(x).any(x, axis=-1)
 
     @property
     def any_truncated(self):
-        return jnp.any(self.truncated, axis=-1)
+        x = self.truncated
+        return xp(x).any(x, axis=-1)
 
     @property
     def any_over_shoulder(self):
-        return jnp.any(self.over_shoulder, axis=-1)
+        x = self.over_shoulder
+        return xp(x).any(x, axis=-1)
 
     @property
     def max_pressure_ratio(self):
-        return jnp.maximum(jnp.max(self.pressure_ratio_inner, axis=-1),
-                           jnp.max(self.pressure_ratio_outer, axis=-1))
+        pi, po = host(self.pressure_ratio_inner), host(self.pressure_ratio_outer)
+        x = xp(pi, po)
+        return x.maximum(x.max(pi, axis=-1), x.max(po, axis=-1))
 
     @property
     def max_friction_ratio(self):
-        return jnp.max(self.friction_ratio, axis=-1)
+        f = host(self.friction_ratio)
+        return xp(f).max(f, axis=-1)
 
     @property
     def min_edge_margin(self):
         """Smallest edge margin over the contacts (rad; pi when no contact is loaded)."""
-        m = jnp.minimum(jnp.minimum(self.edge_high_inner, self.edge_low_inner),
-                        jnp.minimum(self.edge_high_outer, self.edge_low_outer))
-        return jnp.min(m, axis=-1)
+        e = [host(v) for v in (self.edge_high_inner, self.edge_low_inner, self.edge_high_outer, self.edge_low_outer)]
+        x = xp(*e)
+        return x.min(x.minimum(x.minimum(e[0], e[1]), x.minimum(e[2], e[3])), axis=-1)
 
 
 def required_friction(sol, bearing, control="outer"):

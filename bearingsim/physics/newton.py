@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from ..errors import failed
+from ..hostarrays import xp
 from ..programs import jit
 
 __all__ = ["LS_STEPS", "FREE_STEPS", "RING_CAP", "BALL_CAP", "NEWTON_FAILURES", "traced_tolerances",
@@ -47,7 +48,8 @@ NEWTON_FAILURES = (1, 2, 3)
 def traced_tolerances(maxit, rtol, atol):
     """``(maxit, rtol, atol)`` as arrays, not Python scalars: changing a tolerance must not
     recompile."""
-    return jnp.asarray(maxit, jnp.int32), jnp.asarray(rtol, jnp.float64), jnp.asarray(atol, jnp.float64)
+    x = xp(maxit, rtol, atol)
+    return x.asarray(maxit, x.int32), x.asarray(rtol, x.float64), x.asarray(atol, x.float64)
 
 
 def max_abs(*arrays):

@@ -56,6 +56,7 @@ from .balls import (KN, UM, ball_equations, ball_state, groove_centre_offsets, i
                     reactions_from_balls, static_ball_position)
 from .defect import as_defects, contact_depths
 from ..errors import failed, InputError, succeeded
+from ..hostarrays import host, xp
 from .hertz import contact_ellipse, stiffness_curve
 from .jones import PRESSURE_WARNING, RESULTS, JonesSolution, initial_displacement, state_validity
 from .kinematics import Operation
@@ -842,16 +843,18 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
     checked here: facings +1 / -1, springs 1 / 0, not all springs); ``offsets`` None (from the preloads) or (n, N) rigid offsets to
     hold (e.g. those fixed at standstill while the speed changes).  Failed items are retried
     once with 8 speed steps."""
-    loads = jnp.asarray(loads, jnp.float64)
+    # the batch is laid out in NumPy outside a program (bearingsim.hostarrays: no eager programs)
+    x = xp(bset, op, loads, cage_angle, preload, facings, positions, springs, offsets)
+    loads = x.asarray(loads, x.float64)
     n, N = loads.shape[0], bset.n
     op_b = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op,
-                       (jnp.broadcast_to(op.speed, (n,)), jnp.broadcast_to(op.centrifugal, (n,)),
-                        jnp.broadcast_to(op.gyroscopic, (n,))))
-    cage = jnp.asarray(cage_angle, jnp.float64)
-    cage = jnp.broadcast_to(cage[..., None] if cage.ndim == 1 else cage, (n, N))
+                       (x.broadcast_to(host(op.speed), (n,)), x.broadcast_to(host(op.centrifugal), (n,)),
+                        x.broadcast_to(host(op.gyroscopic), (n,))))
+    cage = x.asarray(host(cage_angle), x.float64)
+    cage = x.broadcast_to(cage[..., None] if cage.ndim == 1 else cage, (n, N))
 
     def per_item(v, default):
-        return jnp.broadcast_to(default if v is None else jnp.asarray(v, jnp.float64), (n, N))
+        return x.broadcast_to(host(default) if v is None else x.asarray(host(v), x.float64), (n, N))
 
     P = per_item(preload, bset.preload)
     S = per_item(facings, bset.facings)
@@ -866,7 +869,7 @@ def solve_set_batch(bset: BearingSet, op: Operation, loads, *, cage_angle=0.0, s
         return _solve_batch_jit(bset, o, loads[sel], cage[sel], spalls, P[sel], S[sel], Z[sel],
                                 SP[sel], steps, maxit, rtol, atol, hertz_method, None if e is None else e[sel])
 
-    sol = run(jnp.arange(n), speed_steps)
+    sol = run(slice(None), speed_steps)
     if speed_steps < 8:     # the failed items again with 8 speed steps (only them)
         sol = retry_failed(sol, lambda idx: run(idx, 8), converged_only)
     if throw:
