@@ -821,12 +821,13 @@ def solve_batch(bearing, op: Operation, loads, *, cage_angle=0.0, spall: Spall |
     ``throw=True`` raises for the first failed item, naming how many failed.
     """
     _check_held_loads(loads, tilt)
-    loads = jnp.asarray(loads, dtype=jnp.float64)
+    loads = f64(loads)
     n = loads.shape[0]
+    x = xp(bearing, op, loads, cage_angle)     # the batch laid out in NumPy outside a program
     op_b = eqx.tree_at(lambda p: (p.speed, p.centrifugal, p.gyroscopic), op,
-                       (jnp.broadcast_to(op.speed, (n,)), jnp.broadcast_to(op.centrifugal, (n,)),
-                        jnp.broadcast_to(op.gyroscopic, (n,))))
-    cage = jnp.broadcast_to(jnp.asarray(cage_angle, dtype=jnp.float64), (n,))
+                       (x.broadcast_to(host(op.speed), (n,)), x.broadcast_to(host(op.centrifugal), (n,)),
+                        x.broadcast_to(host(op.gyroscopic), (n,))))
+    cage = x.broadcast_to(x.asarray(host(cage_angle), dtype=x.float64), (n,))
     maxit, rtol, atol = traced_tolerances(maxit, rtol, atol)
     spall = canonical_defects(spall)
     sol = _solve_batch_jit(bearing, op_b, loads, cage, spall, speed_steps, maxit, rtol, atol,

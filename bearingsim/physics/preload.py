@@ -10,6 +10,8 @@ import jax.numpy as jnp
 from jax import lax
 
 from ..errors import InputError
+from ..hostarrays import f64
+from ..programs import jit
 from .hertz import contact_ellipse, power_eval, stiffness_curve
 from .jones import initial_displacement
 
@@ -38,8 +40,13 @@ def thrust_at_approach(bearing, approach, curve=None):
 
 def preload_offset(bearing, preload, curve=None):
     """The axial approach e (m) at which one bearing carries the thrust ``preload`` (N) at
-    omega = 0: the rigid-preload offset of docs/model.md section 10 (0 for a preload <= 0)."""
+    omega = 0: the rigid-preload offset of docs/model.md section 10 (0 for a preload <= 0).
+    One kept program (its Newton loop eager was traced and compiled again at every call)."""
     curve = stiffness_curve(bearing) if curve is None else curve
+    return _preload_offset_jit(bearing, f64(preload), curve)
+
+
+def _preload_offset(bearing, preload, curve):
     P = jnp.maximum(jnp.asarray(preload, jnp.float64), 0.0)
     P23 = jnp.cbrt(P) ** 2
     start = initial_displacement(bearing, jnp.stack([0.0, 0.0, jnp.where(P > 0, P, 1.0), 0.0, 0.0]),
@@ -62,6 +69,9 @@ def preload_offset(bearing, preload, curve=None):
     return jnp.where(P > 0, x, 0.0)
 
 
+_preload_offset_jit = jit(_preload_offset)
+
+
 #: preload classes as fractions of the static axial capacity C_0a (:func:`static_axial_capacity`):
 #: the 1 : 2 : 4 steps of the light / medium / heavy classes of spindle-bearing catalogues, scaled
 #: so that the Harris 218 (40 deg, C_0a = 436 kN in this model) gets 1.3 / 2.6 / 5.2 kN, the order
@@ -74,8 +84,12 @@ STATIC_PRESSURE = 4.2e9
 def static_axial_capacity(bearing, curve=None, pressure=STATIC_PRESSURE):
     """C_0a (N): the thrust at which the peak contact pressure at omega = 0 reaches ``pressure``
     (ISO 76: 4.2 GPa for ball bearings) in the docs/model.md section 4 closed form (the larger of the inner
-    and outer contacts' p_max; bisection on the axial approach)."""
+    and outer contacts' p_max; bisection on the axial approach).  One kept program."""
     curve = stiffness_curve(bearing) if curve is None else curve
+    return _capacity_jit(bearing, curve, f64(pressure))
+
+
+def _static_axial_capacity(bearing, curve, pressure):
     BD = bearing.A
     a0 = bearing.free_contact_angle
 
@@ -95,6 +109,9 @@ def static_axial_capacity(bearing, curve=None, pressure=STATIC_PRESSURE):
 
     lo, hi = lax.fori_loop(0, 80, body, (jnp.float64(0.0), 0.02 * bearing.ball_diameter))
     return thrust_at_approach(bearing, 0.5 * (lo + hi), curve)
+
+
+_capacity_jit = jit(_static_axial_capacity)
 
 
 def preload_class_force(bearing, name: str):
