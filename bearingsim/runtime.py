@@ -55,6 +55,21 @@ MIN_COMPILE_TIME_S = 0.0
 #: LLVM emitters (a new shape of ``a * 2.0``, 2-core Xeon, LLVM -O0, 2026-12-07).  Set before JAX
 #: starts, unless ``XLA_FLAGS`` already names the option.
 EAGER_XLA_FLAG = "--xla_cpu_use_fusion_emitters=false"
+#: the jaxlib from which :data:`EAGER_XLA_FLAG` is set: an XLA flag a jaxlib does not know aborts
+#: the process, and the CPU fusion emitters are an XLA of 2025 (used with jaxlib 0.10.2 on CPUs and
+#: 0.11.2 on an H200); an older jaxlib gets no flag (its programs are checked by bearingsim.xla)
+EAGER_XLA_FLAG_SINCE = (0, 7)
+
+
+def _jaxlib_at_least(version) -> bool:
+    """Whether the installed jaxlib (read from its metadata: JAX is not imported) is >= ``version``."""
+    from importlib.metadata import PackageNotFoundError, version as installed      # local: start-up only
+
+    try:
+        parts = installed("jaxlib").split(".")[:2]
+        return tuple(int("".join(c for c in p if c.isdigit()) or 0) for p in parts) >= tuple(version)
+    except (PackageNotFoundError, ValueError):
+        return False
 
 _state: dict = {}
 
@@ -92,7 +107,7 @@ def configure() -> Path | None:
         os.environ["JAX_ENABLE_X64"] = "True"
         os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = min_s
         flags = os.environ.get("XLA_FLAGS", "")
-        if EAGER_XLA_FLAG.split("=")[0] not in flags:
+        if EAGER_XLA_FLAG.split("=")[0] not in flags and _jaxlib_at_least(EAGER_XLA_FLAG_SINCE):
             os.environ["XLA_FLAGS"] = f"{flags} {EAGER_XLA_FLAG}".strip()
         if d is not None:
             os.environ["JAX_COMPILATION_CACHE_DIR"] = str(d)
