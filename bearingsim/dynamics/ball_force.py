@@ -185,9 +185,9 @@ class BallCarry(NamedTuple):
 
 def initial_ball_carry(n_balls):
     """A :class:`BallCarry` whose first step solves in full."""
-    z = jnp.zeros(n_balls)
-    return BallCarry(z, z, z, z, (z, z, z, z), (z, z, z, z), jnp.bool_(False), jnp.float64(0.0),
-                     jnp.float64(0.0), jnp.float64(0.0))
+    z = np.zeros(n_balls)          # NumPy: no eager operation on the host, constants in a trace
+    return BallCarry(z, z, z, z, (z, z, z, z), (z, z, z, z), np.zeros((), bool), np.zeros(()), np.zeros(()),
+                     np.zeros(()))
 
 
 def _sensitivity(bearing, X1, X2, A1, A2, Ho, Hi):
@@ -383,7 +383,7 @@ def precompile_ball_check(bearing, op, spall, curve, theta0=0.0):
 
     def run():
         try:
-            choose_ball_iterations(bearing, op, jnp.zeros(5), defects, curve, theta0, spin_ratio=0.5)
+            choose_ball_iterations(bearing, op, np.zeros(5), defects, curve, theta0, spin_ratio=0.5)
         except Exception:       # noqa: BLE001 -- the real call raises it
             pass
 
@@ -419,8 +419,8 @@ def choose_ball_iterations(bearing, op, q, spall, curve, theta0=0.0, tol=ITER_TO
     pad = CHECK_ANGLES - len(angles)
     if pad > 0:
         angles, phis = angles + [angles[-1]] * pad, phis + [phis[-1]] * pad
-    errs = np.asarray(_ball_errors_jit(bearing, op, jnp.asarray(q), spall, curve, jnp.asarray(angles),
-                                       jnp.array([0.95, 1.0, 1.05]), jnp.asarray(phis),
-                                       jnp.asarray(float(spin_ratio))))
+    errs = np.asarray(_ball_errors_jit(bearing, op, np.asarray(q, np.float64), spall, curve,
+                                       np.asarray(angles, np.float64), np.array([0.95, 1.0, 1.05]),
+                                       np.asarray(phis, np.float64), np.float64(spin_ratio)))
     ok = np.flatnonzero(errs <= tol)
     return (ITER_CHOICES[int(ok[0])], float(errs[ok[0]])) if ok.size else (0, float(errs.min()))

@@ -214,7 +214,7 @@ def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, 
     flt = sensor_mod.host_sensor_filter(f, z, g, h)
     record = rec0 is not None
     chord = ball_solver == "chord" and scheme == "newmark"
-    carry = (y0, dy0, jnp.zeros(f.shape + (2,))) + ((jnp.asarray(rec0),) if record else ()) + (
+    carry = (y0, dy0, np.zeros(np.shape(f) + (2,))) + ((np.asarray(rec0, np.float64),) if record else ()) + (
         (initial_ball_carry(model.bearing.n_balls),) if chord else ())
     outs = []
     bar = None
@@ -223,10 +223,10 @@ def run_fixed(model, y0, dy0, motion, edges, fs, T, scheme, substeps, progress, 
         bar = tqdm(total=T, desc="simulate", unit="sample", unit_scale=True, dynamic_ncols=True)
     md = pad_knots(motion, 256)
     e = np.asarray(edges, float)
-    edges_dev = jnp.asarray(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
+    edges_dev = jax.device_put(np.concatenate([e, np.full(_pad_to(e.size) - e.size, np.inf)]))
     for k0 in range(0, T, CHUNK):
         n = min(CHUNK, T - k0)
-        carry, out = _advance_device_jit(model, carry, md, edges_dev, jnp.float64(k0), jnp.float64(h), flt,
+        carry, out = _advance_device_jit(model, carry, md, edges_dev, np.float64(k0), np.float64(h), flt,
                                          scheme, int(substeps), float(fs), record, chord)
         outs.append(out)            # stays on the device until the end (no round trip per chunk)
         if bar is not None:
@@ -262,12 +262,12 @@ def precompile_fixed(model, y0, motion, edges, fs, scheme, substeps, rec0=None, 
     if key in _PRECOMPILED:
         return None
     _PRECOMPILED.add(key)
-    y0 = jnp.asarray(y0)
+    y0 = np.asarray(y0, np.float64)
 
     def run():
         try:
-            run_fixed(model, y0, jnp.zeros_like(y0), motion, edges, fs, CHUNK, scheme, substeps, False,
-                      None if rec0 is None else jnp.zeros_like(jnp.asarray(rec0)), ball_solver)
+            run_fixed(model, y0, np.zeros_like(y0), motion, edges, fs, CHUNK, scheme, substeps, False,
+                      None if rec0 is None else np.zeros(np.shape(rec0)), ball_solver)
         except Exception:       # noqa: BLE001 -- the real run raises it
             pass
 

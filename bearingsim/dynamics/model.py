@@ -32,11 +32,11 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from ..hostarrays import f64, host, xp
 from ..physics.defect import advance, contact_depths
 from ..physics.kinematics import Operation
 from ..programs import jit
@@ -114,7 +114,8 @@ class DynamicModel(eqx.Module):
     def masses(self):
         """(5,) masses of [x_s, y_s, z_s, x_h, y_h]."""
         p = self.params
-        return jnp.stack([p.shaft_mass] * 3 + [p.housing_mass] * 2)
+        ms, mh = f64(p.shaft_mass), f64(p.housing_mass)
+        return xp(ms, mh).stack([ms] * 3 + [mh] * 2)
 
     def damping_matrix(self):
         """(5, 5) linear damping: contact damping C_b on v_rel and the support damping c_h."""
@@ -149,35 +150,39 @@ class DynamicModel(eqx.Module):
         return jnp.concatenate([v, a])
 
 
-@jax.jit
 def damping_matrix(cb, ch):
     """(5, 5) damping of [x_s, y_s, z_s, x_h, y_h] from the contact damping cb (3,) on the
-    shaft-housing motion and the support damping ch; one small program (called on the host it
-    compiles once instead of a dozen element-wise kernels; inside a trace it is inlined)."""
+    shaft-housing motion and the support damping ch (NumPy on the host, JAX in a trace:
+    :mod:`bearingsim.hostarrays`; negations and one sum, the same values either way)."""
+    xn = xp(cb, ch)
+    cb, ch = f64(cb), f64(ch)
     c0, c1, c2 = cb[..., 0], cb[..., 1], cb[..., 2]
-    z = jnp.zeros_like(c0)
+    z = xn.zeros_like(c0)
     rows = ((c0, z, z, -c0, z), (z, c1, z, z, -c1), (z, z, c2, z, z), (-c0, z, z, c0 + ch, z), (z, -c1, z, z, c1 + ch))
-    return jnp.stack([jnp.stack(r, -1) for r in rows], -2)
+    return xn.stack([xn.stack(r, -1) for r in rows], -2)
 
 
-@jax.jit
 def contact_damping(Kt, ratio, mass):
-    """Contact damping 2 zeta sqrt(K m) per shaft direction from the bearing stiffness (one
-    program, see :func:`damping_matrix`)."""
-    K = jnp.diagonal(Kt, axis1=-2, axis2=-1)
-    return 2.0 * ratio[..., None] * jnp.sqrt(jnp.maximum(K, 0.0) * mass[..., None])
+    """Contact damping 2 zeta sqrt(K m) per shaft direction from the bearing stiffness (NumPy
+    on the host, JAX in a trace; correctly rounded operations, the same values either way)."""
+    xn = xp(Kt, ratio, mass)
+    Kt, ratio, mass = f64(Kt), f64(ratio), f64(mass)
+    K = xn.diagonal(Kt, axis1=-2, axis2=-1)
+    return 2.0 * ratio[..., None] * xn.sqrt(xn.maximum(K, 0.0) * mass[..., None])
 
 
 def build_model(bearing, op, loads, defects, sol, params: DynamicsParameters, curve, iterations,
                 spin_ratio=0.0):
     """DynamicModel from the quasi-static solution ``sol`` (its tilts, stiffness and the contact
     damping built from it); ``defects``: a tuple of Spall (see :class:`DynamicModel`)."""
-    q = sol.displacement
-    Kt = sol.stiffness[..., :3, :3]
+    # a concrete solution's arrays read into NumPy: no eager operation on the host
+    q = host(sol.displacement)
+    Kt = host(sol.stiffness)[..., :3, :3]
     cb = contact_damping(Kt, params.contact_damping_ratio, params.shaft_mass)
-    loads = jnp.asarray(loads, jnp.float64)
+    loads = f64(host(loads))
+    spin = f64(host(spin_ratio))
     return DynamicModel(bearing, op, tuple(defects), curve, loads, q[..., 3:5], cb, Kt,
-                        jnp.asarray(spin_ratio, jnp.float64) + jnp.zeros(jnp.shape(q)[:-1]),
+                        spin + xp(spin, q).zeros(np.shape(q)[:-1]),
                         params, *((int(iterations), None) if isinstance(iterations, (int, np.integer))
                                   else (1, jnp.asarray(iterations, jnp.int32))))
 

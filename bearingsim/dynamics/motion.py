@@ -252,8 +252,7 @@ def pad_knots(m: Motion, block=256) -> Motion:
     extra = np.arange(1, n - ku.size + 1, dtype=float)
     ku, kp = np.concatenate([ku, ku[-1] + extra]), np.concatenate([kp, kp[-1] + extra])
     z = np.zeros(n - 1)
-    return m._replace(knots_u=jnp.asarray(ku), knots_p=jnp.asarray(kp), slip_draws=jnp.asarray(z),
-                      inside=jnp.asarray(z.astype(bool)))
+    return m._replace(knots_u=ku, knots_p=kp, slip_draws=z, inside=z.astype(bool))
 
 
 #: one run's motion at its samples, and its defect times: compiled programs (kept, loaded warm),
@@ -274,14 +273,14 @@ def _times(m: Motion, Z, spalls, duration, spin_ratio, offsets):
         return np.zeros(0)
     # the list's length: the largest phase span over the run in periods, plus margin, rounded up
     # to a power of two (few programs)
-    theta, phi, _ = (np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(np.linspace(0.0, float(duration), 65))))
+    theta, phi, _ = (np.asarray(v) for v in run_motion_at(m, Z, np.linspace(0.0, float(duration), 65)))
     need = 0
     for sp in active:
         span = {"outer": theta, "inner": theta - phi, "ball": float(spin_ratio) * phi}[sp.location]
         period = np.pi if sp.location == "ball" else 2 * np.pi / Z
         need = max(need, int(np.ceil(float(np.ptp(span)) / period)) + 4)
     count = 1 << max(need - 1, 7).bit_length()
-    t = np.asarray(_defect_times_jit(m, Z, active, jnp.float64(float(spin_ratio)), float(duration), count,
+    t = np.asarray(_defect_times_jit(m, Z, active, np.float64(spin_ratio), float(duration), count,
                                      tuple(offsets)))
     return np.unique(t[np.isfinite(t)])
 

@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from ..keys import stream_key
 from ..programs import jit
 from ..xla import QUICK_COMPILE
 
@@ -177,15 +178,16 @@ def measurement_noise(key, n, rms, fs=None, band=None):
 
 
 def _noise(key, rms, n, fs, band):
-    return measurement_noise(key, n, rms, fs, band)
+    return measurement_noise(stream_key(key, "noise"), n, rms, fs, band)
 
 
 _noise_jit = jit(_noise)
 
 
 def host_measurement_noise(key, n, rms, fs=None, band=None):
-    """:func:`measurement_noise` as one kept program (:mod:`bearingsim.programs`; ``rms`` an
+    """:func:`measurement_noise` of the item ``key``'s ``noise`` stream (:func:`bearingsim.keys.stream_key`,
+    as a data set item draws it) as one kept program (:mod:`bearingsim.programs`; ``rms`` an
     argument, ``n``, ``fs`` and ``band`` its static settings): a simulation's noise without ~10
     operations run one by one."""
-    return _noise_jit(key, np.float64(rms), int(n), None if fs is None else float(fs),
+    return _noise_jit(np.asarray(key, np.uint32), np.float64(rms), int(n), None if fs is None else float(fs),
                       None if band is None else tuple(float(b) for b in band))

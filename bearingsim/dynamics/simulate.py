@@ -29,7 +29,7 @@ from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_it
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
 from .frequencies import characteristic_frequencies, spin_ratio
 from .model import DynamicModel, build_model, choose_substeps, initial_state_jit, linear_modes
-from ..keys import item_keys, stream_key
+from ..keys import item_keys
 from .motion import (MOTION_STREAM, defect_edge_times, defect_pass_times, draw_motion, knot_count, motion_realism,
                      run_labels, run_motion_at)
 from .parameters import RESULTS, DynamicsError, DynamicsParameters, Realism
@@ -99,18 +99,18 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
         tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
         st = PassSettings(float(fs), pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
                           pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
-        a, fac, shifts, cv, jit_ = pass_variability(jnp.asarray(key, jnp.uint32), jnp.asarray(housing, jnp.float64),
-                                                    jnp.asarray(sensor, jnp.float64), jnp.asarray(tp),
-                                                    jnp.float64(unbridged), jnp.stack([jnp.asarray(v, jnp.float64)
-                                                                                       for v in modes], -1),
-                                                    jnp.float64(1.0), st)
+        # NumPy arguments: the kept program takes them as they are (no eager operation)
+        a, fac, shifts, cv, jit_ = pass_variability(np.asarray(key, np.uint32), np.asarray(housing, np.float64),
+                                                    np.asarray(sensor, np.float64), tp, np.float64(unbridged),
+                                                    np.stack([np.asarray(v, np.float64) for v in modes], -1),
+                                                    np.float64(1.0), st)
         out = np.asarray(a, float)
         labels.update(unbridged_fraction=float(unbridged), pass_amplitude_cv_percent=100.0 * float(cv),
                       pass_delay_sd_percent=100.0 * float(jit_), pass_factors=np.asarray(fac)[:n + 1],
                       pass_shifts=np.asarray(shifts)[:n + 1])
     noise = np.zeros(T)
     if realism.noise_rms > 0.0:
-        noise = np.asarray(host_measurement_noise(stream_key(jnp.asarray(key, jnp.uint32), "noise"), T, realism.noise_rms, fs,
+        noise = np.asarray(host_measurement_noise(key, T, realism.noise_rms, fs,
                                              realism.noise_band), float)
     return out, noise, labels
 
@@ -195,8 +195,8 @@ def _motion_from_key(key, Z, theta0, omega_c, omega0, duration, center, realism,
     wc = omega_c if np.isfinite(omega_c) and omega_c > 0 else 0.0
     if n_knots is None:
         n_knots = knot_count(Z, wc / (2 * np.pi), duration, realism.speed_fluctuation_percent / 100.0)
-    return _draw_from_key_jit(jnp.asarray(key, jnp.uint32), Z, jnp.float64(theta0), jnp.float64(wc),
-                              jnp.float64(omega0), float(duration), jnp.float64(center), motion_realism(realism),
+    return _draw_from_key_jit(np.asarray(key, np.uint32), Z, np.float64(theta0), np.float64(wc),
+                              np.float64(omega0), float(duration), np.float64(center), motion_realism(realism),
                               int(n_knots))
 
 
@@ -239,7 +239,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     params = DynamicsParameters() if params is None else params
     realism = Realism() if realism is None else realism
     defects = as_defects(spall)
-    loads = jnp.asarray(loads, jnp.float64)
+    loads = np.asarray(loads, np.float64)
     fs = float(sample_rate)
     ts = time_grid(duration, fs)
     T = ts.size
@@ -265,11 +265,11 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             ball_iterations = ITER_CHOICES[-1]
             code = code or RESULTS.ball_solver
     model = build_model(bearing, op, loads, defects, sol, params, curve, int(ball_iterations), k_spin)
-    key = item_keys(seed, [0])[0] if key is None else key
+    key = np.asarray(item_keys(seed, [0]))[0] if key is None else key
     Z = bearing.n_balls
     m = _motion_from_key(key, Z, theta0, float(sol.cage_speed), float(op.speed), ts[-1],
                          slip_reference(defects), realism, n_knots)
-    st0 = jnp.asarray(np.stack([np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(np.zeros(1)))], -1)[0])
+    st0 = np.stack([np.asarray(v) for v in run_motion_at(m, Z, np.zeros(1))], -1)[0]
     if substeps == "auto":
         lam = np.abs(linear_modes(model))
         substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
@@ -278,10 +278,10 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     pre = None
     if integrator == "fixed" and code == RESULTS.successful:
         # the time loop's program compiles on another core while the equilibrium's does
-        y_rest = jnp.concatenate([sol.displacement[:3], jnp.zeros(7)])
+        y_rest = np.concatenate([np.asarray(sol.displacement)[:3], np.zeros(7)])
         rec_like = np.zeros((RECORD_ROWS, bearing.n_balls)) if record_balls else None
         pre = precompile_fixed(model, y_rest, m, jumps, fs, scheme, substeps, rec_like, ball_solver)
-    y0, ok, dy0, rec0 = initial_state_jit(model, sol.displacement[:3], st0)
+    y0, ok, dy0, rec0 = initial_state_jit(model, np.asarray(sol.displacement)[:3], st0)
     if not bool(ok):
         code = code or RESULTS.initial_equilibrium
     if pre is not None:
@@ -305,7 +305,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         extra = f" (quasi-static: {sol.message()[0]}, result {q_code})" if q_code else ""
         hint = result_hint(q_code, loads, bearing=bearing) if q_code else code.hint
         raise DynamicsError(f"dynamic simulation failed: {code.message}{extra}", hint, code)
-    theta, phi, omega = (np.asarray(v) for v in run_motion_at(m, Z, jnp.asarray(ts)))
+    theta, phi, omega = (np.asarray(v) for v in run_motion_at(m, Z, np.asarray(ts, np.float64)))
     rel = np.stack([y[:, 0] - y[:, 3], y[:, 1] - y[:, 4], y[:, 2]], axis=1)
     balls = [None] * 4
     if record_balls and code == RESULTS.successful:

@@ -109,7 +109,8 @@ class Bearing(eqx.Module):
         bearing given by its clearance is a deep-groove bearing unless ``design`` says otherwise."""
         B = f_inner + f_outer - 1.0
         c = 1.0 - diametral_clearance / (2.0 * B * ball_diameter)
-        alpha0 = jnp.arccos(jnp.clip(c, -1.0, 1.0))
+        xn = xp(c)
+        alpha0 = xn.arccos(xn.clip(c, -1.0, 1.0))      # NumPy's arccos on the host (libm, <= 1 ulp from XLA's)
         return cls(n_balls, ball_diameter, pitch_diameter, f_inner, f_outer, alpha0,
                    ball_material, ring_material, shoulder_angles, design)
 

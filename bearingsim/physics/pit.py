@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InputError
+from ..hostarrays import f64, xp
 from .jones import solve
 
 __all__ = ["Contact", "PIT_LOCATIONS", "contact_of", "contact_at", "PitDepth", "pit_load_fraction",
@@ -240,11 +241,11 @@ def effective_depth(contact, w, machined, D):
 
 
 def unbridged(pit_diameter, contact_semi_axis_b):
-    """``max(0, 1 - 2 b / w)`` (:func:`unbridged_fraction`; jit/vmap; 0 for w = 0)."""
-    import jax.numpy as jnp
-
-    w = jnp.asarray(pit_diameter, jnp.float64)
-    return jnp.where(w > 0.0, jnp.maximum(0.0, 1.0 - 2.0 * contact_semi_axis_b / jnp.where(w > 0, w, 1.0)), 0.0)
+    """``max(0, 1 - 2 b / w)`` (:func:`unbridged_fraction`; jit/vmap; 0 for w = 0; NumPy where
+    nothing is traced, :mod:`bearingsim.hostarrays`)."""
+    xn = xp(pit_diameter, contact_semi_axis_b)
+    w = f64(pit_diameter)
+    return xn.where(w > 0.0, xn.maximum(0.0, 1.0 - 2.0 * contact_semi_axis_b / xn.where(w > 0, w, 1.0)), 0.0)
 
 
 def pit_of_solution(sol, bearing, j, location, pit_diameter, machined_depth):
