@@ -8,6 +8,7 @@ in ``result`` (:class:`RESULTS`), never used silently.
 """
 from __future__ import annotations
 
+import threading
 from typing import NamedTuple
 
 import equinox as eqx
@@ -95,15 +96,8 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
     out = np.asarray(sensor, float)
     if realism.pass_variation:
         n = int(np.size(pass_times))
-        P = max(n, 1 << max(n, 1).bit_length())          # a few padded shapes: one program per power of two
-        tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
-        st = PassSettings(float(fs), pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
-                          pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
-        # NumPy arguments: the kept program takes them as they are (no eager operation)
-        a, fac, shifts, cv, jit_ = pass_variability(np.asarray(key, np.uint32), np.asarray(housing, np.float64),
-                                                    np.asarray(sensor, np.float64), tp, np.float64(unbridged),
-                                                    np.stack([np.asarray(v, np.float64) for v in modes], -1),
-                                                    np.float64(1.0), st)
+        args, st = _pass_arguments(key, housing, sensor, pass_times, unbridged, modes, realism, fs)
+        a, fac, shifts, cv, jit_ = pass_variability(*args, st)
         out = np.asarray(a, float)
         labels.update(unbridged_fraction=float(unbridged), pass_amplitude_cv_percent=100.0 * float(cv),
                       pass_delay_sd_percent=100.0 * float(jit_), pass_factors=np.asarray(fac)[:n + 1],
@@ -113,6 +107,51 @@ def finish_record(key, housing, sensor, pass_times, unbridged, modes, realism, f
         noise = np.asarray(host_measurement_noise(key, T, realism.noise_rms, fs,
                                              realism.noise_band), float)
     return out, noise, labels
+
+
+def _pass_arguments(key, housing, sensor, pass_times, unbridged, modes, realism, fs):
+    """The arguments of :func:`pass_variability` for one record (NumPy: the kept program takes
+    them as they are, no eager operation) and its static settings."""
+    n = int(np.size(pass_times))
+    P = max(n, 1 << max(n, 1).bit_length())          # a few padded shapes: one program per power of two
+    tp = np.concatenate([np.asarray(pass_times, float), np.full(P - n, np.inf)])
+    st = PassSettings(float(fs), pass_cv_max=0.01 * float(realism.pass_amplitude_cv_max_percent),
+                      pass_delay_max=0.01 * float(realism.pass_delay_sd_max_percent))
+    return (np.asarray(key, np.uint32), np.asarray(housing, np.float64), np.asarray(sensor, np.float64), tp,
+            np.float64(unbridged), np.stack([np.asarray(v, np.float64) for v in modes], -1), np.float64(1.0)), st
+
+
+_PRECOMPILED: set = set()
+
+
+def precompile_passes(T, pass_times, modes, realism, fs, after=None):
+    """Compile the pass-to-pass program of :func:`finish_record` for a record of ``T`` samples in
+    a background thread once the thread ``after`` (the time loop's compilation) is done, so that
+    it compiles while the time loop runs (a first simulation compiled it after the loop: 1.0-1.4
+    s on a 2-core CPU; started beside the time loop's compilation it delayed that one instead).
+    None when this configuration was compiled before in this process or the variability is off.
+    The thread runs it once on zeros and discards the result (an error there is the program's
+    own and is raised by the real call)."""
+    if not realism.pass_variation:
+        return None
+    z = np.zeros(int(T))
+    args, st = _pass_arguments(np.zeros(2, np.uint32), z, z, pass_times, 0.0, modes, realism, fs)
+    key = (tuple(np.shape(a) for a in args), st)
+    if key in _PRECOMPILED:
+        return None
+    _PRECOMPILED.add(key)
+
+    def run():
+        try:
+            if after is not None:
+                after.join()
+            pass_variability(*args, st)
+        except Exception:       # noqa: BLE001 -- the real call raises it
+            pass
+
+    th = threading.Thread(target=run, name="bearingsim-precompile", daemon=True)
+    th.start()
+    return th
 
 
 class DynamicsResult(NamedTuple):
@@ -281,6 +320,7 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         y_rest = np.concatenate([np.asarray(sol.displacement)[:3], np.zeros(7)])
         rec_like = np.zeros((RECORD_ROWS, bearing.n_balls)) if record_balls else None
         pre = precompile_fixed(model, y_rest, m, jumps, fs, scheme, substeps, rec_like, ball_solver)
+        precompile_passes(T, defect_pass_times(m, Z, defects, ts[-1], k_spin), params.modes(), realism, fs, pre)
     y0, ok, dy0, rec0 = initial_state_jit(model, np.asarray(sol.displacement)[:3], st0)
     if not bool(ok):
         code = code or RESULTS.initial_equilibrium
