@@ -109,8 +109,9 @@ class Bearing(eqx.Module):
         bearing given by its clearance is a deep-groove bearing unless ``design`` says otherwise."""
         B = f_inner + f_outer - 1.0
         c = 1.0 - diametral_clearance / (2.0 * B * ball_diameter)
-        xn = xp(c)
-        alpha0 = xn.arccos(xn.clip(c, -1.0, 1.0))      # NumPy's arccos on the host (libm, <= 1 ulp from XLA's)
+        # JAX's arccos on the host too (NumPy's libm differs from XLA's in the last bit for ~1/4
+        # of the values: bearingsim.hostarrays moves only operations that agree to the bit)
+        alpha0 = jnp.arccos(jnp.clip(c, -1.0, 1.0))
         return cls(n_balls, ball_diameter, pitch_diameter, f_inner, f_outer, alpha0,
                    ball_material, ring_material, shoulder_angles, design)
 
