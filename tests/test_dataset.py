@@ -22,7 +22,7 @@ def spec(duration=0.02, extra=""):
     return parse_case((CWRU + f"""
 [dataset]
 count = 6
-chunk = 3
+chunk = 4
 seed = 7
 duration_s = {duration}
 healthy_fraction = 0.34
@@ -196,14 +196,14 @@ def test_failed_items_are_zero_and_flagged(tmp_path, monkeypatch):
 
 def _interrupting(monkeypatch, at_call, how):
     """device_program that stops the run (Ctrl-C or SIGTERM to this process) at its call
-    number ``at_call`` (one call per chunk); the CPU micro-batch width set to 3, so that the
-    6-item spec at chunk 3 has two chunks."""
+    number ``at_call`` (one call per chunk); the 6-item spec at chunk 4 (the CPU micro-batch
+    width): two chunks, 4 and 2 items (the programs of the other tests of the spec:
+    a width of its own compiled three more, ~20 s of the suite on 2 cores)."""
     import os
     import signal
 
     import bearingsim.datasets as dsm
 
-    monkeypatch.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
     monkeypatch.setenv("BEARINGSIM_THREADS", "1")      # chunks in order: "call 2" is chunk 1's
     real = dsm.program.device_program
     calls = []
@@ -232,7 +232,7 @@ def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, 
     with pytest.raises(Interrupted) as e:
         make_dataset(case, out, progress=False)
     msg = str(e.value)
-    assert "\n" not in msg and how in msg and "3 of 6 items finished" in msg and e.value.exit_code == 130
+    assert "\n" not in msg and how in msg and "4 of 6 items finished" in msg and e.value.exit_code == 130
     assert not out.exists()
     kept = sorted(p.name for p in partial_path(out).iterdir())
     assert kept == ["chunk_000000", "spec.json"]
@@ -243,7 +243,7 @@ def test_interrupted_run_resumes_to_the_same_file(files, tmp_path, monkeypatch, 
     assert len(calls) == 1 and s.count == 6 and s.failed == 0     # only the missing chunk ran
     assert not partial_path(out).exists()
     ref = make_dataset(case, tmp_path / "ref.h5", progress=False)     # uninterrupted, the same width
-    assert ref.chunk == 3
+    assert ref.chunk == 4
     assert out.read_bytes() == (tmp_path / "ref.h5").read_bytes()
 
 

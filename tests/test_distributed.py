@@ -18,22 +18,12 @@ from test_dataset import spec as _spec  # noqa: E402
 
 
 def spec():
-    """The tiny spec of test_dataset (6 items of 0.02 s in 2 chunks of 3) with round-pit depths
-    (computed inside the chunk program, on the workers)."""
+    """The tiny spec of test_dataset (6 items of 0.02 s; at chunk 4, the CPU micro-batch
+    width: 2 chunks, of 4 and 2 items) with round-pit depths (computed inside the
+    chunk program, on the workers)."""
     return _spec(extra='depth_rule = "pit"')
 
 distributed = pytest.importorskip("distributed")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def width3():
-    """The CPU micro-batch width set to 3 in this (client) process, so that the 6 items make two
-    chunks of one micro-batch each (the width travels to the workers in the plan)."""
-    import bearingsim.datasets as dsm
-    mp = pytest.MonkeyPatch()
-    mp.setitem(dsm.program.MICRO_BATCH, "cpu", 3)
-    yield
-    mp.undo()
 
 
 def _no_dask(monkeypatch):
@@ -104,17 +94,17 @@ def test_two_workers_same_bytes_with_a_worker_killed(serial, runner, tmp_path):
 
 
 def test_two_workers_and_another_chunk_size(serial, runner, tmp_path):
-    """2 workers at chunk 6 (one chunk of two micro-batches) give the bytes of the in-process run
-    at chunk 3 (two chunks)."""
-    out = tmp_path / "c6.h5"
-    s = make_dataset(spec(), out, progress=False, runner=runner, chunk=6)
-    assert s.chunk == 6 and s.failed == 0
+    """2 workers at chunk 8 (one chunk of two micro-batches, the second padded) give the bytes of
+    the in-process run at chunk 4 (two chunks)."""
+    out = tmp_path / "c8.h5"
+    s = make_dataset(spec(), out, progress=False, runner=runner, chunk=8)
+    assert s.chunk == 8 and s.failed == 0
     _same(serial, out)
 
 
 def test_interrupted_distributed_run_resumes_in_process(serial, runner, tmp_path):
     out = tmp_path / "i.h5"
-    with pytest.raises(Interrupted, match="3 of 6 items finished"):
+    with pytest.raises(Interrupted, match="4 of 6 items finished"):
         make_dataset(spec(), out, progress=False, runner=_Via(runner, lambda fn: fn, stop_after=1))
     assert not out.exists() and len(list(partial_path(out).glob("chunk_*"))) == 1
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
