@@ -314,13 +314,14 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
         substeps = choose_substeps(np.max(lam[np.isfinite(lam)], initial=0.0), fs)
     substeps = int(substeps)
     jumps = defect_edge_times(m, Z, rectangular(defects), ts[-1] + 1.0 / fs, k_spin)
+    pass_times = defect_pass_times(m, Z, defects, ts[-1], k_spin)      # of the drawn motion only
     pre = None
     if integrator == "fixed" and code == RESULTS.successful:
         # the time loop's program compiles on another core while the equilibrium's does
         y_rest = np.concatenate([np.asarray(sol.displacement)[:3], np.zeros(7)])
         rec_like = np.zeros((RECORD_ROWS, bearing.n_balls)) if record_balls else None
         pre = precompile_fixed(model, y_rest, m, jumps, fs, scheme, substeps, rec_like, ball_solver)
-        precompile_passes(T, defect_pass_times(m, Z, defects, ts[-1], k_spin), params.modes(), realism, fs, pre)
+        precompile_passes(T, pass_times, params.modes(), realism, fs, pre)
     y0, ok, dy0, rec0 = initial_state_jit(model, np.asarray(sol.displacement)[:3], st0)
     if not bool(ok):
         code = code or RESULTS.initial_equilibrium
@@ -355,7 +356,6 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
             balls = ball_records(model, rel, theta, phi, omega, int(ball_iterations) + 1)
     labels = run_labels(m, realism, seed)
     labels["ball_solver_error"] = float(err)
-    pass_times = defect_pass_times(m, Z, defects, ts[-1], k_spin)
     noise = np.zeros(T)
     if code == RESULTS.successful:
         sens, noise, more = finish_record(key, ah[:, 0], sens, pass_times, u, params.modes(), realism, fs)
