@@ -9,6 +9,16 @@ in milliseconds), so the options favour compile time where run time does not suf
   (355 kernels instead of 390) and runs as fast or faster (1.6-1.9 ms vs 2.2-3.8 ms); the
   dynamics' time step runs at the same speed (1.09-1.38 vs 1.23-1.34 s per simulated second of
   the CWRU case at 48 kHz); ``make test`` took 11 min 48 s instead of 15-17 min.
+* ``xla_cpu_parallel_codegen_split_count = 1``: the CPU backend emits a program's LLVM module as
+  one object file instead of 32 parts compiled on a thread pool.  On two cores the parts only
+  add work (the test workers, or the package's own compile and prefetch threads, already fill
+  both): measured on 2026-12-08 (jax 0.10.2, 2-core VM, empty caches, the CWRU solve and a 0.01 s
+  simulation): at LLVM -O0 the compile events 11.2-12.4 s -> 9.2-10.2 s and the process 20.7-21.2
+  -> 16.6-19.1 s of CPU; at XLA's default level the same wall time, 30-32 -> 28.6-31.4 s of CPU.
+  A warm process loads the executables faster (one object file to link: the CWRU Jones program
+  0.59-0.77 s -> 0.54-0.58 s, its time loop 0.44-0.59 s -> 0.32-0.39 s).  The machine code
+  differs: a CWRU record's samples moved by ~1e-11 relative (every result stays a function of
+  the package version, the spec and the device type).
 
 :func:`compiler_options` gives them for ``jax.jit(f, compiler_options=...)``; every program of the
 package is compiled with them (:func:`bearingsim.programs.jit`, which also keeps the traced
@@ -28,7 +38,7 @@ from .runtime import cold, mark_warm
 __all__ = ["PREFERRED_OPTIONS", "QUICK_COMPILE", "compiler_options", "lowering_platform"]
 
 #: XLA compile options for every bearingsim program (see the module docstring for the measurements)
-PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_parallel_codegen_split_count": 1}
 
 #: extra options of a program that runs for milliseconds per call and is compiled on a user's first
 #: command (the single Jones state of ``bearingsim static``): LLVM at -O0.  Measured 2026-11-28
