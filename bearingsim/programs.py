@@ -1,38 +1,34 @@
 """Traced programs kept across processes: a warm start loads a program instead of tracing it.
 
 JAX's persistent compilation cache (:mod:`bearingsim.runtime`) skips XLA's compilation, not
-Python's tracing and lowering: a warm process still traces every program again, and for the data
-engine's chunk programs that was most of a warm 16-item data set's 30 s.  :func:`jit` (every
-program of the package) keeps the traced program itself: the first call of a configuration traces and lowers it with
-:func:`jax.export.export`, writes the serialized program (StableHLO bytecode, ``flatbuffers``) to
-the program cache and runs it; the next process with the same configuration reads it back
-(:func:`jax.export.deserialize`), and only XLA's compilation remains, which the persistent
-compilation cache then answers.
+Python's tracing and lowering (most of a warm 16-item data set's 30 s).  :func:`jit` (every
+program of the package) keeps the traced program: the first call of a configuration traces and
+lowers it with :func:`jax.export.export`, writes the serialized program (StableHLO bytecode,
+``flatbuffers``) to the program cache and runs it; the next process with the same configuration
+reads it back (:func:`jax.export.deserialize`) and the persistent cache answers the compilation.
 
 The key of a program is everything its trace depends on:
 
 * the package source (a hash of every ``bearingsim/**/*.py`` file) and the versions of Python,
   jax, jaxlib, equinox, diffrax, optimistix, lineax and NumPy; float64 on or off;
 * the platform it runs on (``cpu``, ``gpu``, ...);
-* the function (module, qualified name, bytecode with its constants and names, its closure);
-  a function defined outside the package (a test's, a user's script's) keeps its program in
-  memory only: the globals it reads are in no hash;
+* the function (module, qualified name, bytecode, constants, names, closure); one defined outside
+  the package (a test's, a script's) is kept in memory only: the globals it reads are in no hash;
 * every static argument (everything that is not an array, as :func:`equinox.filter_jit` splits
   them), by value: numbers, strings, enums, tuples, dicts, dataclasses, equinox modules' static
   fields, NumPy arrays by their bytes; an argument of a type it cannot describe exactly makes the
   call an ordinary (unkept) program, never a guess;
 * the shape, dtype and weak type of every array argument.
 
-Where: ``<compilation cache>/bearingsim-programs/`` (the folder of :func:`runtime.cache_dir`, so
-``bearingsim cache --clear`` clears both); ``BEARINGSIM_PROGRAM_CACHE=off`` keeps programs in
-memory only.  A file that cannot be read (another jax, a partial copy) is traced again and
-replaced, with one line on stderr.  Files are written atomically (a temporary file renamed).
+Where: ``<compilation cache>/bearingsim-programs/`` (``bearingsim cache --clear`` clears both);
+``BEARINGSIM_PROGRAM_CACHE=off`` keeps programs in memory only.  A file that cannot be read
+(another jax, a partial copy) is traced again and replaced, with one line on stderr.  Files are
+written atomically (a temporary file renamed).
 
 :data:`COUNTS` counts, per process, the programs ``traced`` (and written), ``loaded`` from
 files, ``compiled`` by XLA and answered by the compilation cache (``compile_cache_hits``), and
 ``unkept`` calls (a static argument it cannot describe, or a program :func:`jax.export` refuses);
-:func:`counts` returns a copy (``benchmarks/bench_dataset.py`` prints it, a test checks that a
-warm process loads and does not trace).
+:func:`counts` returns a copy (``benchmarks/bench_dataset.py`` prints it).
 """
 from __future__ import annotations
 
@@ -60,9 +56,8 @@ __all__ = ["jit", "KeptProgram", "COUNTS", "counts", "program_dir", "source_hash
 
 #: the layout of a kept program's file (bumped when it changes)
 FORMAT = 1
-#: per-process counts of programs traced, loaded, compiled, ... (see the module docstring)
 COUNTS = {"traced": 0, "loaded": 0, "memory": 0, "unkept": 0, "compiled": 0, "compile_cache_hits": 0, "memo_hits": 0,
-          "prefetched": 0}
+          "prefetched": 0}      # per process (see the module docstring)
 _LOCK = threading.Lock()
 _ALL: "weakref.WeakSet[KeptProgram]" = weakref.WeakSet()
 
@@ -275,9 +270,7 @@ class KeptProgram:
             with _LOCK:
                 COUNTS["memory"] += 1
         if _RECORDING and disk and prog is not False:
-            with _LOCK:
-                for rec in _RECORDING:
-                    rec.setdefault((self._name, key), None)
+            _note_use((self._name, key), threading.current_thread() is threading.main_thread())
         if prog is False:                               # jax.export refused it: an ordinary program
             return self._jit(*args, **kwargs)
         call, template = prog
@@ -416,9 +409,16 @@ _RECORDING: list = []
 
 def record(into: dict, on: bool = True) -> None:
     """Record in ``into`` (a dict, in order of first use) the (name, key) of every kept program
-    called from now on (``on`` False: stop; :func:`bearingsim.warm.prefetching`)."""
+    called from now on: the rank of the main thread's first call of it, None while only other
+    threads called it (``on`` False: stop; :func:`bearingsim.warm.prefetching`)."""
     with _LOCK:
         _RECORDING.append(into) if on else _RECORDING.remove(into)
+
+
+def _note_use(entry, main: bool) -> None:
+    with _LOCK:
+        for rec in (r for r in _RECORDING if r.get(entry) is None):
+            rec[entry] = sum(v is not None for v in rec.values()) if main else None
 
 
 def kept_programs() -> dict:

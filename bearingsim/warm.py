@@ -14,7 +14,35 @@ import jax
 
 from . import programs
 
-__all__ = ["memo", "prefetching"]
+__all__ = ["memo", "prefetching", "recall"]
+
+
+def _memo_path(name: str, inputs):
+    """The file of ``inputs`` under ``name`` (None: no cache folder, or inputs it cannot describe)."""
+    d = programs.program_dir()
+    if d is None:
+        return None
+    try:
+        leaves, tree = jax.tree_util.tree_flatten(inputs)
+        desc = f"{name}|{programs.describe(tree)}|{programs.describe(tuple(leaves))}"
+    except programs.Undescribable:
+        return None
+    key = hashlib.sha256(f"{programs.source_hash()}|{desc}".encode()).hexdigest()[:32]
+    return d / f"{key}.memo.json"
+
+
+def recall(name: str, inputs, default=None):
+    """The value :func:`memo` kept for ``inputs`` under ``name``, else ``default`` (nothing is
+    computed): for a caller that starts work only a miss needs (a compile thread)."""
+    path = _memo_path(name, inputs)
+    if path is None:
+        return default
+    try:
+        value = json.loads(path.read_text())["value"]
+    except (OSError, ValueError, KeyError):
+        return default
+    programs.count("memo_hits")
+    return value
 
 
 def memo(name: str, inputs, compute):
@@ -25,25 +53,16 @@ def memo(name: str, inputs, compute):
     (:func:`bearingsim.datasets.program.run_settings`, 2.2 s of a warm 16-item run): a warm start
     reads them.  Inputs it cannot describe exactly, or no cache folder: computed every time.
     :data:`bearingsim.programs.COUNTS` counts ``memo_hits``."""
-    d = programs.program_dir()
-    if d is None:
+    path = _memo_path(name, inputs)
+    if path is None:
         return compute()
-    try:
-        leaves, tree = jax.tree_util.tree_flatten(inputs)
-        desc = f"{name}|{programs.describe(tree)}|{programs.describe(tuple(leaves))}"
-    except programs.Undescribable:
-        return compute()
-    key = hashlib.sha256(f"{programs.source_hash()}|{desc}".encode()).hexdigest()[:32]
-    path = d / f"{key}.memo.json"
-    try:
-        value = json.loads(path.read_text())["value"]
-        programs.count("memo_hits")
+    missing = object()
+    value = recall(name, inputs, missing)
+    if value is not missing:
         return value
-    except (OSError, ValueError, KeyError):
-        pass
     value = compute()
     try:
-        d.mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
         tmp.write_text(json.dumps({"name": name, "value": value}))
         os.replace(tmp, path)
@@ -74,13 +93,21 @@ def prefetching(name: str, device=None):
     by_name = programs.kept_programs()
     todo = [(by_name[n], k) for n, k in recorded if n in by_name]
 
-    def load(part):
-        for p, k in part:
+    queue = list(reversed(todo))
+
+    def load():
+        while True:
+            try:
+                p, k = queue.pop()          # atomic under the GIL: each program taken once
+            except IndexError:
+                return
             p.prefetch(k, dev)
 
-    # two loaders, in the order the last run first used the programs (0, 2, ... and 1, 3, ...)
-    threads = [threading.Thread(target=load, args=(todo[i::2],), daemon=True, name="bearingsim-prefetch")
-               for i in range(min(2, len(todo)))]
+    # two loaders taking the programs in the order the last run's main thread first needed them,
+    # then those only its background threads used (a compile thread's early call of a program
+    # the main thread needs later: ball_errors before solve_state, a warm `bearingsim simulate`)
+    threads = [threading.Thread(target=load, daemon=True, name="bearingsim-prefetch")
+               for _ in range(min(2, len(todo)))]
     for t in threads:
         t.start()
     mine: dict = {}             # (name, key) in the order of first use
@@ -91,11 +118,13 @@ def prefetching(name: str, device=None):
         programs.record(mine, on=False)
         for t in threads:
             t.join()
-        if mine and list(mine) != recorded:
+        order = (sorted((k for k, r in mine.items() if r is not None), key=mine.get)
+                 + [k for k, r in mine.items() if r is None])
+        if order and order != recorded:
             try:
                 d.mkdir(parents=True, exist_ok=True)
                 tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-                tmp.write_text(json.dumps(list(mine)))
+                tmp.write_text(json.dumps(order))
                 os.replace(tmp, path)
             except OSError:
                 pass

@@ -131,13 +131,20 @@ def test_ball_balance_is_ball_state():
             assert float(jnp.max(jnp.abs(got - num))) <= 1e-4 * jscale
 
 
-def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
+def test_precompile_threads_compile_the_programs_the_run_uses(caplog, tmp_path, monkeypatch):
     """simulate compiles the ball-step check and the time loop in background threads
     (dynamics.precompile_ball_check, precompile_fixed) while the quasi-static solve and the
     equilibrium at t = 0 compile: after the threads are joined the run itself compiles neither
     (the warm-ups built the same programs: same padding, static arguments and shapes).  A
-    bearing with 11 balls, used by no other test, so that nothing is compiled before."""
+    bearing with 11 balls, used by no other test, so that nothing is compiled before; a program
+    folder of its own, so that no earlier run's kept Newton count (below) skips the check.  The
+    same simulation again reads the check's Newton count (bearingsim.warm.memo): no check runs,
+    the same record."""
     import logging
+
+    from bearingsim import programs
+
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
 
     c = parse_case(CWRU_LIKE.replace("balls = 9", "balls = 11"), "eleven.toml")
     b, op, F, sp = c.bearing(), c.operation(), c.loads(), c.spall()
@@ -158,3 +165,8 @@ def test_precompile_threads_compile_the_programs_the_run_uses(caplog):
         assert all(t == "bearingsim-precompile" for t in threads), (name, threads)
     # a second configuration already compiled: no thread
     assert dyn.precompile_ball_check(b, op, (sp,), hertz.stiffness_curve(b), c.cage_angle) is None
+    hits = programs.counts()["memo_hits"]
+    again = dyn.simulate(b, op, F, sp, p, 0.01, 48000.0, theta0=c.cage_angle, progress=False)
+    assert programs.counts()["memo_hits"] == hits + 1
+    assert again.realism["ball_solver_error"] == r.realism["ball_solver_error"] and again.ball_iterations == r.ball_iterations
+    np.testing.assert_array_equal(np.asarray(again.sensor_acceleration), np.asarray(r.sensor_acceleration))

@@ -149,6 +149,7 @@ def test_memo_computes_once_per_exact_input_and_survives_a_bad_file(tmp_path, mo
     assert warm.memo("t", base, compute(1)) == 1
     assert warm.memo("t", base, compute(2)) == 1            # read, not computed
     assert programs.counts()["memo_hits"] == hits + 1 and calls == [1]
+    assert warm.recall("t", base) == 1 and warm.recall("t", base[:1] + (0.2,) + base[2:], "none") == "none"
     for other in ((Scale(jnp.asarray(2.0), "b"),) + base[1:], base[:1] + (np.nextafter(0.1, 1.0),) + base[2:],
                   base[:2] + (np.arange(3.0) + 1e-12,) + base[3:], base[:3] + (("outer",),)):
         assert warm.memo("t", other, compute(3)) == 3
@@ -186,6 +187,29 @@ def test_prefetching_loads_what_the_last_run_used_before_it_is_called(tmp_path, 
     with warm.prefetching("another name"):  # nothing recorded under it: nothing loaded
         pass
     assert programs.counts()["prefetched"] == after["prefetched"]
+
+
+def test_prefetching_loads_first_what_the_main_thread_needed_first(tmp_path, monkeypatch, b218):
+    """The recorded order is the main thread's order of first use, then the programs only other
+    threads used: a background thread's early call of a program the main thread needs later
+    (a warm `bearingsim simulate`: the ball check's compile thread called ball_errors before the
+    main thread needed solve_state) does not put it ahead of the main thread's first program."""
+    import json
+    import threading
+
+    from bearingsim.keys import item_keys
+    from bearingsim.physics.hertz import stiffness_curve
+
+    monkeypatch.setattr(programs, "program_dir", lambda: tmp_path / "p")
+    with warm.prefetching("order"):
+        t = threading.Thread(target=lambda: stiffness_curve(b218))     # another thread first
+        t.start()
+        t.join()
+        item_keys(3, [0, 1])                                           # the main thread: keys,
+        stiffness_curve(b218)                                          # then the curve
+    (rec,) = (tmp_path / "p").glob("*.prefetch.json")
+    names = [n.rsplit(".", 1)[-1] for n, _ in json.loads(rec.read_text())]
+    assert names == ["_item_keys", "_stiffness_curve"]
 
 
 def test_the_export_lowers_for_the_platform_a_gpu_device_names():

@@ -25,6 +25,7 @@ from .passes import PassSettings, pass_variability
 from .sensor import host_measurement_noise
 from ..physics.pit import pit_unbridged_fraction
 from ..programs import jit
+from .. import warm
 from ..xla import QUICK_COMPILE
 from .ball_force import ITER_CHOICES, RECORD_ROWS, bearing_force, choose_ball_iterations, precompile_ball_check, record_loads_angles
 from .integrate import CHUNK, check_scheme, precompile_fixed, run_adaptive, run_fixed, time_grid
@@ -283,8 +284,12 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     ts = time_grid(duration, fs)
     T = ts.size
     curve = stiffness_curve(bearing, hertz_method)
+    # the Newton count of the ball solve is a function of the quasi-static problem: a warm start
+    # reads it (bearingsim.warm.memo) instead of loading and running the check's program
+    check = ("ball_iterations", (bearing, op, loads, defects, float(theta0), hertz_method))
+    known = warm.recall(*check) if ball_iterations == "auto" else None
     # the ball-step check's program compiles on another core while the quasi-static solve's does
-    pre = precompile_ball_check(bearing, op, defects, curve, theta0) if ball_iterations == "auto" else None
+    pre = precompile_ball_check(bearing, op, defects, curve, theta0) if ball_iterations == "auto" and known is None else None
     sol = solve(bearing, op, loads, cage_angle=theta0, spall=defects or None, hertz_method=hertz_method,
                 throw=False)
     code = RESULTS.successful if succeeded(int(sol.result)) else RESULTS.initial_state
@@ -298,8 +303,8 @@ def simulate(bearing, op: Operation, loads, spall: Spall | tuple | None = None,
     if pre is not None:
         pre.join()
     if ball_iterations == "auto":
-        ball_iterations, err = choose_ball_iterations(bearing, op, sol.displacement, defects, curve, theta0,
-                                                      spin_ratio=k_spin)
+        ball_iterations, err = known or warm.memo(*check, lambda: list(choose_ball_iterations(
+            bearing, op, sol.displacement, defects, curve, theta0, spin_ratio=k_spin)))
         if ball_iterations == 0:
             ball_iterations = ITER_CHOICES[-1]
             code = code or RESULTS.ball_solver
