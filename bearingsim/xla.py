@@ -9,16 +9,17 @@ in milliseconds), so the options favour compile time where run time does not suf
   (355 kernels instead of 390) and runs as fast or faster (1.6-1.9 ms vs 2.2-3.8 ms); the
   dynamics' time step runs at the same speed (1.09-1.38 vs 1.23-1.34 s per simulated second of
   the CWRU case at 48 kHz); ``make test`` took 11 min 48 s instead of 15-17 min.
-* ``xla_cpu_parallel_codegen_split_count = 1``: the CPU backend emits a program's LLVM module as
-  one object file instead of 32 parts compiled on a thread pool.  On two cores the parts only
-  add work (the test workers, or the package's own compile and prefetch threads, already fill
-  both): measured on 2026-12-08 (jax 0.10.2, 2-core VM, empty caches, the CWRU solve and a 0.01 s
-  simulation): at LLVM -O0 the compile events 11.2-12.4 s -> 9.2-10.2 s and the process 20.7-21.2
-  -> 16.6-19.1 s of CPU; at XLA's default level the same wall time, 30-32 -> 28.6-31.4 s of CPU.
-  A warm process loads the executables faster (one object file to link: the CWRU Jones program
-  0.59-0.77 s -> 0.54-0.58 s, its time loop 0.44-0.59 s -> 0.32-0.39 s).  The machine code
-  differs: a CWRU record's samples moved by ~1e-11 relative (every result stays a function of
-  the package version, the spec and the device type).
+* ``xla_cpu_parallel_codegen_split_count = 1`` for a program compiled with LLVM at -O0
+  (:data:`QUICK_CODEGEN`): the CPU backend emits its LLVM module as one object file instead of
+  32 parts compiled on a thread pool.  At -O0 the parts' overhead outweighs the codegen they
+  share out: measured on 2026-12-08 (jax 0.10.2, 2-core VM, empty caches, the CWRU solve and a
+  0.01 s simulation, every program at -O0): compile events 11.2-12.4 s -> 9.2-10.2 s, the
+  process 20.7-21.2 -> 16.6-19.1 s of CPU; three test files of the data sets 150 -> 104 s with
+  two workers.  At XLA's default level the parallel parts pay on two cores (a 16-item data set
+  with an empty cache took 64.8 s with one object file, 45.0 s with 32), so the optimised
+  programs keep them.  The machine code differs: a CWRU record's samples moved by ~1e-11
+  relative with every program at -O0 (a result stays a function of the package version, the
+  spec, the options and the device type).
 
 :func:`compiler_options` gives them for ``jax.jit(f, compiler_options=...)``; every program of the
 package is compiled with them (:func:`bearingsim.programs.jit`, which also keeps the traced
@@ -28,6 +29,7 @@ one-line program).
 from __future__ import annotations
 
 import functools
+import os
 
 import jax
 import jaxlib
@@ -35,10 +37,13 @@ import numpy as np
 
 from .runtime import cold, mark_warm
 
-__all__ = ["PREFERRED_OPTIONS", "QUICK_COMPILE", "compiler_options", "lowering_platform"]
+__all__ = ["PREFERRED_OPTIONS", "QUICK_CODEGEN", "QUICK_COMPILE", "compiler_options", "lowering_platform"]
 
 #: XLA compile options for every bearingsim program (see the module docstring for the measurements)
-PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_parallel_codegen_split_count": 1}
+PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+#: the option of a program compiled with LLVM at -O0 (:data:`QUICK_COMPILE`, or every program where
+#: ``XLA_FLAGS`` sets -O0, as ``make test`` does): one object file (see the module docstring)
+QUICK_CODEGEN = ("xla_cpu_parallel_codegen_split_count", 1)
 
 #: extra options of a program that runs for milliseconds per call and is compiled on a user's first
 #: command (the single Jones state of ``bearingsim static``): LLVM at -O0.  Measured 2026-11-28
@@ -51,9 +56,12 @@ QUICK_COMPILE = (("xla_backend_optimization_level", 0),)
 
 @functools.cache
 def compiler_options(extra: tuple = ()) -> dict:
-    """:data:`PREFERRED_OPTIONS` and the ``extra`` (key, value) pairs if this jaxlib accepts them
-    (checked once per ``extra``), else the options it accepts without ``extra``, else ``{}``."""
+    """:data:`PREFERRED_OPTIONS` and the ``extra`` (key, value) pairs, with :data:`QUICK_CODEGEN`
+    at -O0 (``extra`` or ``XLA_FLAGS`` at process start), if this jaxlib accepts them (checked
+    once per ``extra``), else the options it accepts without ``extra``, else ``{}``."""
     opts = dict(PREFERRED_OPTIONS, **dict(extra))
+    if opts.get("xla_backend_optimization_level") == 0 or "--xla_backend_optimization_level=0" in os.environ.get("XLA_FLAGS", ""):
+        opts.update([QUICK_CODEGEN])
     # the verdict is kept per jaxlib and cache folder (a marker file): the check is a compiled
     # program, ~50 ms of every process's first command on a 2-core CPU even as a cache hit
     key = f"xla-options|{jaxlib.__version__}|{sorted(opts.items())}"
