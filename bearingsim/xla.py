@@ -14,10 +14,13 @@ in milliseconds), so the options favour compile time where run time does not suf
   32 parts compiled on a thread pool.  At -O0 the parts' overhead outweighs the codegen they
   share out: measured on 2026-12-08 (jax 0.10.2, 2-core VM, empty caches, the CWRU solve and a
   0.01 s simulation, every program at -O0): compile events 11.2-12.4 s -> 9.2-10.2 s, the
-  process 20.7-21.2 -> 16.6-19.1 s of CPU; three test files of the data sets 150 -> 104 s with
-  two workers.  At XLA's default level the parallel parts pay on two cores (a 16-item data set
-  with an empty cache took 64.8 s with one object file, 45.0 s with 32), so the optimised
-  programs keep them.  The machine code differs: a CWRU record's samples moved by ~1e-11
+  process 20.7-21.2 -> 16.6-19.1 s of CPU; the first ``bearingsim static`` call 6.9 -> 5.1 s and
+  ``simulate cwru_6205`` 16.1 -> 13.2 s with an empty cache.  At XLA's default level the parallel
+  parts pay on two cores (a 16-item data set with an empty cache took 64.8 s with one object
+  file, 45.0 s with 32), so the optimised programs keep them; and ``make test`` (every program at
+  -O0 through ``XLA_FLAGS``) took 766 s with one file for every program against 729 s without,
+  back to back on a fresh clone, though three-file subsets had run 6-31 % faster: the suite
+  keeps the parts for all but these programs.  The machine code differs: a CWRU record's samples moved by ~1e-11
   relative with every program at -O0 (a result stays a function of the package version, the
   spec, the options and the device type).
 
@@ -29,7 +32,6 @@ one-line program).
 from __future__ import annotations
 
 import functools
-import os
 
 import jax
 import jaxlib
@@ -41,8 +43,8 @@ __all__ = ["PREFERRED_OPTIONS", "QUICK_CODEGEN", "QUICK_COMPILE", "compiler_opti
 
 #: XLA compile options for every bearingsim program (see the module docstring for the measurements)
 PREFERRED_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
-#: the option of a program compiled with LLVM at -O0 (:data:`QUICK_COMPILE`, or every program where
-#: ``XLA_FLAGS`` sets -O0, as ``make test`` does): one object file (see the module docstring)
+#: the option of a program compiled with LLVM at -O0 (:data:`QUICK_COMPILE`): one object file
+#: (see the module docstring)
 QUICK_CODEGEN = ("xla_cpu_parallel_codegen_split_count", 1)
 
 #: extra options of a program that runs for milliseconds per call and is compiled on a user's first
@@ -57,10 +59,10 @@ QUICK_COMPILE = (("xla_backend_optimization_level", 0),)
 @functools.cache
 def compiler_options(extra: tuple = ()) -> dict:
     """:data:`PREFERRED_OPTIONS` and the ``extra`` (key, value) pairs, with :data:`QUICK_CODEGEN`
-    at -O0 (``extra`` or ``XLA_FLAGS`` at process start), if this jaxlib accepts them (checked
-    once per ``extra``), else the options it accepts without ``extra``, else ``{}``."""
+    where ``extra`` asks for -O0, if this jaxlib accepts them (checked once per ``extra``), else
+    the options it accepts without ``extra``, else ``{}``."""
     opts = dict(PREFERRED_OPTIONS, **dict(extra))
-    if opts.get("xla_backend_optimization_level") == 0 or "--xla_backend_optimization_level=0" in os.environ.get("XLA_FLAGS", ""):
+    if opts.get("xla_backend_optimization_level") == 0:
         opts.update([QUICK_CODEGEN])
     # the verdict is kept per jaxlib and cache folder (a marker file): the check is a compiled
     # program, ~50 ms of every process's first command on a 2-core CPU even as a cache hit
