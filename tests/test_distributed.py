@@ -103,8 +103,10 @@ def test_two_workers_and_another_chunk_size(serial, runner, tmp_path):
 
 
 def test_interrupted_distributed_run_resumes_in_process(serial, runner, tmp_path):
+    """Stopped after the first chunk a worker finished: either chunk (4 items or 2; the two
+    workers race, seen on a fresh clone as "2 of 6"), one chunk file kept, then continued."""
     out = tmp_path / "i.h5"
-    with pytest.raises(Interrupted, match="4 of 6 items finished"):
+    with pytest.raises(Interrupted, match="[24] of 6 items finished"):
         make_dataset(spec(), out, progress=False, runner=_Via(runner, lambda fn: fn, stop_after=1))
     assert not out.exists() and len(list(partial_path(out).glob("chunk_*"))) == 1
     assert not [p for p in tmp_path.rglob("*") if p.name.endswith(".tmp")]
