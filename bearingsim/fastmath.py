@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-__all__ = ["recip", "rsqrt", "safe_div", "safe_recip", "norm2", "pow15", "clamp"]
+__all__ = ["recip", "rsqrt", "safe_div", "safe_recip", "norm2", "pow15", "clamp", "kernel"]
 
 
 @jax.custom_jvp
@@ -98,3 +98,25 @@ def _pow15_jvp(primals, tangents):
     (x,), (t,) = primals, tangents
     r = jnp.sqrt(x)
     return x * r, (1.5 * r) * t
+
+
+@jax.custom_jvp
+def kernel(x):
+    """``x`` itself (exactly, for finite ``x``), computed once in a kernel of its own.
+
+    XLA's CPU backend copies a chain of cheap element-wise operations (multiplications,
+    additions, selects) into every kernel that consumes it, and recomputes it there; only an
+    expensive operation (a division, a square root) ends a kernel that several consumers read.
+    So a long chain with several consumers (K(alpha)'s 16-term Horner, read by the loads and by
+    both tangent directions of a Newton step) runs once per consumer.  This ends the chain in a
+    division by ``x * 0 + 1`` (exactly 1 for finite ``x``; XLA folds neither ``x * 0`` nor the
+    quotient for floating point); the tangent is divided by the same one (a kernel of its own
+    too, and linear in the tangent: reverse mode transposes it)."""
+    return x / (x * 0.0 + 1.0)
+
+
+@kernel.defjvp
+def _kernel_jvp(primals, tangents):
+    (x,), (t,) = primals, tangents
+    one = x * 0.0 + 1.0
+    return x / one, t / one

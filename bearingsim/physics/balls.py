@@ -35,7 +35,7 @@ import jax.numpy as jnp
 from jax import lax
 
 from .newton import inverse2, solve2  # noqa: F401  (re-exported: jones and shaft take them from here)
-from ..fastmath import clamp, norm2, pow15, recip, safe_div
+from ..fastmath import clamp, kernel, norm2, pow15, recip, safe_div
 from .hertz import power_eval
 from .kinematics import Operation, ball_kinematics_cs
 
@@ -251,6 +251,7 @@ def _contacts_stacked(bearing, curve, X1, X2, A1, A2, H_outer, H_inner):
     K = jnp.reshape(coeffs[:, -1], sh) + jnp.zeros_like(x)
     for k in range(coeffs.shape[-1] - 2, -1, -1):
         K = K * x + jnp.reshape(coeffs[:, k], sh)
+    K = kernel(K)           # read by Q, the record and every tangent: computed once (fastmath.kernel)
     Q = K * _pow15((delta > 0.0) & (cs > 0.0), delta)
     return _Contacts(sn[0], cs[0], sn[1], cs[1], delta[1], delta[0], K[1], K[0], Q[1], Q[0])
 
