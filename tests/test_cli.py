@@ -157,3 +157,26 @@ def test_an_unwritable_plot_is_refused_before_the_work(argv, tmp_path, monkeypat
     assert cli.main(argv + [str(tmp_path / "file" / "out.png")]) == 4
     err = capsys.readouterr().err
     assert err.startswith("bearingsim: error: cannot write --plot") and "Traceback" not in err
+
+
+def test_the_console_command_leaves_after_the_exit_handlers_with_the_exit_code(tmp_path):
+    """``bearingsim`` (cli.run) skips the interpreter's teardown only after the exit handlers ran
+    and the streams are flushed, and exits with main's code: 2 for a case that does not exist,
+    0 for ``info``; a non-daemon thread still running is waited for (the ordinary exit)."""
+    import subprocess
+    import sys
+
+    def console(args, thread=False):
+        code = ("import atexit, sys, threading, time; "
+                "atexit.register(lambda: print('handler ran', flush=True)); "
+                + ("threading.Thread(target=lambda: (time.sleep(0.5), print('thread done'))).start(); " if thread else "")
+                + f"sys.argv = ['bearingsim'] + {args!r}; from bearingsim.app.cli import run; "
+                "print('before', end=''); run()")
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+
+    r = console(["static", "no_such_case"])
+    assert r.returncode == 2 and r.stdout == "beforehandler ran\n" and "no such case file" in r.stderr
+    r = console(["info", "demo"])
+    assert r.returncode == 0 and r.stdout.startswith("before") and r.stdout.endswith("handler ran\n"), r.stdout[-200:]
+    r = console(["info", "demo"], thread=True)
+    assert r.returncode == 0 and "thread done" in r.stdout and r.stdout.endswith("handler ran\n")

@@ -10,6 +10,7 @@ interrupted (Ctrl-C / SIGTERM: one line, nothing half-written).
 from __future__ import annotations
 
 import _thread
+import atexit
 import argparse
 import os
 import shutil
@@ -307,12 +308,22 @@ def main(argv=None):
 
 def run():
     """The ``bearingsim`` console command: :func:`main`, and after an interrupt an immediate
-    exit (compilations still running in background threads are not waited for)."""
+    exit (compilations still running in background threads are not waited for).  A finished
+    command whose other threads are all daemons (nothing left to wait for) runs the exit
+    handlers, flushes and leaves without the interpreter's teardown of JAX's modules and
+    compiled programs (~0.3 s of every command on a 2-core CPU, 2026-12-08: ``bearingsim static
+    demo``, warm, 1.6-1.9 s -> 1.3-1.5 s); every file is closed by then (written atomically)."""
     code = main()
     if code == 130:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(130)
+    code = 0 if code is None else code
+    if isinstance(code, int) and all(t.daemon for t in threading.enumerate() if t is not threading.main_thread()):
+        atexit._run_exitfuncs()
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     sys.exit(code)
 
 
