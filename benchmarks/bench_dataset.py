@@ -53,10 +53,10 @@ atexit.register(shutil.rmtree, WARM, True)
 def command(args, tmp, cache=None):
     """Wall seconds, peak RSS (bytes) and stdout of ``bearingsim ARGS`` in a fresh process;
     the process's program counts (traced / loaded / compiled) are in the last line."""
-    code = ("import resource, sys; from bearingsim.app.cli import main; rc = main(sys.argv[1:]); "
+    code = ("import resource, sys; from bearingsim.app.cli import leave, main; rc = main(sys.argv[1:]); "
             "from bearingsim import programs; c = programs.counts(); "
             "print('COUNTS', c['traced'], c['loaded'], c['compiled'], c['compile_cache_hits']); "
-            "print('RSS', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024); sys.exit(rc)")
+            "print('RSS', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024); leave(rc)")
     t0 = time.perf_counter()
     p = subprocess.run([PY, "-c", code, *args], env=_env(cache), cwd=tmp, capture_output=True, text=True)
     wall = time.perf_counter() - t0

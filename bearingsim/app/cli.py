@@ -313,7 +313,11 @@ def run():
     handlers, flushes and leaves without the interpreter's teardown of JAX's modules and
     compiled programs (~0.3 s of every command on a 2-core CPU, 2026-12-08: ``bearingsim static
     demo``, warm, 1.6-1.9 s -> 1.3-1.5 s); every file is closed by then (written atomically)."""
-    code = main()
+    leave(main())
+
+
+def leave(code):
+    """Exit the ``bearingsim`` process with ``code`` (:func:`main`'s) as :func:`run` does."""
     if code == 130:
         sys.stdout.flush()
         sys.stderr.flush()
