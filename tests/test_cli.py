@@ -167,11 +167,12 @@ def test_the_console_command_leaves_after_the_exit_handlers_with_the_exit_code(t
     import sys
 
     def console(args, thread=False):
+        # the thread (3 s, started after the imports) outlives the command: os._exit would lose it
         code = ("import atexit, sys, threading, time; "
                 "atexit.register(lambda: print('handler ran', flush=True)); "
-                + ("threading.Thread(target=lambda: (time.sleep(0.5), print('thread done'))).start(); " if thread else "")
-                + f"sys.argv = ['bearingsim'] + {args!r}; from bearingsim.app.cli import run; "
-                "print('before', end=''); run()")
+                f"sys.argv = ['bearingsim'] + {args!r}; from bearingsim.app.cli import run; "
+                + ("threading.Thread(target=lambda: (time.sleep(3.0), print('thread done'))).start(); " if thread else "")
+                + "print('before', end=''); run()")
         return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=120)
 
     r = console(["static", "no_such_case"])
